@@ -1,0 +1,1 @@
+"""Evolutionary co-design of robot hands and their control (Meixner, Hazard, Pollard)."""

@@ -1,0 +1,1 @@
+"""Reading bags of runs: reports, replays, robustness studies and design export."""

@@ -1,0 +1,63 @@
+"""Topic names, message types and QoS of the co-design loop, shared by every node.
+
+Every topic of the loop is reliable and transient-local with a deep history, so that no
+candidate or evaluation is lost when a population is larger than a default depth, and a
+subscriber that matches late (a recorder, an evaluator started by hand) still receives what
+was published before it matched.
+"""
+
+from hand_codesign_msgs.msg import Candidate
+from hand_codesign_msgs.msg import Evaluation
+from hand_codesign_msgs.msg import EvaluatorStatus
+from hand_codesign_msgs.msg import GenerationSummary
+from hand_codesign_msgs.msg import RunInfo
+from rclpy.qos import DurabilityPolicy
+from rclpy.qos import HistoryPolicy
+from rclpy.qos import QoSProfile
+from rclpy.qos import ReliabilityPolicy
+
+RUN_INFO = 'run_info'
+CANDIDATES = 'candidates'
+EVALUATIONS = 'evaluations'
+EVALUATOR_STATUS = 'evaluator_status'
+GENERATION_SUMMARY = 'generation_summary'
+
+# Deep enough for several generations of the largest population of Table I (250).
+HISTORY_DEPTH = 4096
+
+LOOP_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=HISTORY_DEPTH,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+
+# Heartbeats are only worth their latest value; a late joiner needs none of the old ones.
+STATUS_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=64,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+
+MESSAGE_TYPES = {
+    RUN_INFO: RunInfo,
+    CANDIDATES: Candidate,
+    EVALUATIONS: Evaluation,
+    EVALUATOR_STATUS: EvaluatorStatus,
+    GENERATION_SUMMARY: GenerationSummary,
+}
+
+QOS = {
+    RUN_INFO: LOOP_QOS,
+    CANDIDATES: LOOP_QOS,
+    EVALUATIONS: LOOP_QOS,
+    EVALUATOR_STATUS: STATUS_QOS,
+    GENERATION_SUMMARY: LOOP_QOS,
+}
+
+
+def type_name(message_class):
+    """Return the ROS type name of a message class, e.g. 'hand_codesign_msgs/msg/Candidate'."""
+    module = message_class.__module__.split('.')[0]
+    return f'{module}/msg/{message_class.__name__}'

@@ -1,0 +1,33 @@
+import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'hand_codesign'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test', 'test.*']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/config', glob.glob('config/*.yaml')),
+        ('share/' + package_name + '/config/tasks', glob.glob('config/tasks/*.yaml')),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='hand_codesign developers',
+    maintainer_email='hand-codesign@example.org',
+    description='Evolutionary co-design of robot hands and their control, as ROS 2 nodes.',
+    license='Apache-2.0',
+    tests_require=['pytest'],
+    entry_points={
+        'console_scripts': [
+            'optimizer = hand_codesign.ros.optimizer_node:main',
+            'evaluator = hand_codesign.ros.evaluator_node:main',
+            'recorder = hand_codesign.ros.recorder_node:main',
+            'codesign = hand_codesign.cli:main',
+            'hand-codesign = hand_codesign.cli:main',
+        ],
+    },
+)
