@@ -1,0 +1,1 @@
+"""Pure-Python core of hand_codesign: tasks, hand model, simulation, objectives, optimizers."""
