@@ -1,0 +1,362 @@
+"""
+Write rosbag2-compatible MCAP bags from serialized (CDR) messages.
+
+The file layout is the one rosbag2's MCAP storage plugin writes, so that ``ros2 bag``,
+Foxglove, mcap-ros2-support and rosbags read our bags like any recorded with ``ros2 bag``:
+
+- profile ``ros2``; one schema per message type, named like ``pkg/msg/Type``, with encoding
+  ``ros2msg`` and as data the type's own ``.msg`` text followed by every dependency (depth
+  first, each once) after a line of 80 ``=`` and a line ``MSG: <type as written in the field>``;
+- one channel per topic (absolute name), message encoding ``cdr``, and in its metadata the
+  publishers' ``offered_qos_profiles`` (a YAML list, as rosbag2 serializes it) and the
+  ``topic_type_hash`` (RIHS01) of the type;
+- zstd-compressed chunks with message indexes, then the summary (schemas, channels,
+  statistics, chunk indexes, summary offsets) and the footer on close.
+
+A bag is either one ``.mcap`` file (``ros2 bag info file.mcap``, ``ros2 bag play file.mcap``,
+rosbags and mcap all read a bare file) or, for a path without the ``.mcap`` suffix, a rosbag2
+bag directory ``<path>/<name>_0.mcap`` with the ``metadata.yaml`` that ``ros2 bag`` and
+``rosbags.rosbag2.Reader`` expect of a directory (written on close; ``ros2 bag reindex``
+rebuilds it for a directory whose recorder was killed).
+
+Message definitions are looked up at run time in ``share/<pkg>/msg/<Type>.msg`` of the
+packages on ``AMENT_PREFIX_PATH`` (via ament_index_python), so any installed type works.
+"""
+
+import json
+import os
+import pathlib
+import re
+import time
+
+from ament_index_python.packages import get_package_share_directory
+from ament_index_python.packages import PackageNotFoundError
+from mcap.writer import CompressionType
+from mcap.writer import Writer
+import yaml
+
+PROFILE = 'ros2'
+SCHEMA_ENCODING = 'ros2msg'
+MESSAGE_ENCODING = 'cdr'
+LIBRARY = 'hand_codesign.mcap_writer'
+DEFINITION_DELIMITER = '=' * 80
+# rosbag2 reads a directory's metadata.yaml of version 9 (Jazzy) with QoS enums as names.
+METADATA_VERSION = 9
+
+# The field-type pattern and primitive list of rosbag2's local message definition source:
+# keeping them identical makes our schema text byte-identical to the one rosbag2 writes.
+_FIELD_TYPE = re.compile(r'(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+')
+_PRIMITIVE_TYPES = frozenset((
+    'bool', 'byte', 'char', 'float32', 'float64', 'int8', 'uint8', 'int16', 'uint16',
+    'int32', 'uint32', 'int64', 'uint64', 'string'))
+_TYPE_NAME = re.compile(r'^([a-zA-Z][a-zA-Z0-9_]*)/(?:([a-zA-Z][a-zA-Z0-9_]*)/)?'
+                        r'([a-zA-Z][a-zA-Z0-9_]*)$')
+_MAX_DEFINITION_DEPTH = 50
+
+
+class DefinitionError(LookupError):
+    """A message type whose definition cannot be found or understood."""
+
+
+class BagWriteError(RuntimeError):
+    """A bag that cannot be written (bad path, unknown topic, writer already closed)."""
+
+
+def _split_type_name(type_name):
+    """Return (package, namespace, name) of 'pkg/msg/Type' or 'pkg/Type'."""
+    match = _TYPE_NAME.match(type_name)
+    if match is None:
+        raise DefinitionError(
+            f'message type {type_name!r} is not of the form "package/msg/Type" or '
+            '"package/Type"')
+    package, namespace, name = match.groups()
+    return package, namespace or 'msg', name
+
+
+def _interface_file(type_name, extension):
+    """Return the path of the installed interface file of a type, e.g. its .msg."""
+    package, namespace, name = _split_type_name(type_name)
+    try:
+        share = get_package_share_directory(package)
+    except (PackageNotFoundError, LookupError, ValueError) as error:
+        raise DefinitionError(
+            f'package {package!r} of message type {type_name!r} is not installed under '
+            f'AMENT_PREFIX_PATH={os.environ.get("AMENT_PREFIX_PATH", "")!r}: {error}'
+        ) from None
+    return pathlib.Path(share) / namespace / f'{name}{extension}'
+
+
+def _msg_text(type_name):
+    """Return the installed .msg text of a type exactly as on disk."""
+    path = _interface_file(type_name, '.msg')
+    try:
+        return path.read_text(encoding='utf-8')
+    except OSError as error:
+        raise DefinitionError(
+            f'no message definition for {type_name!r}: cannot read {path}: {error}') from None
+
+
+def msg_dependencies(text, package):
+    """Return the sorted non-primitive field types of a .msg text, bare names prefixed."""
+    dependencies = set()
+    for match in _FIELD_TYPE.finditer(text):
+        field_type = match.group(1)
+        if field_type in _PRIMITIVE_TYPES:
+            continue
+        dependencies.add(field_type if '/' in field_type else f'{package}/{field_type}')
+    return sorted(dependencies)
+
+
+def message_definition(type_name):
+    """
+    Return the complete ``ros2msg`` definition of a type as rosbag2 writes it in a schema.
+
+    The type's own .msg text comes first; then, depth first and each once, every type it
+    depends on, each preceded by a line of 80 '=' and a line 'MSG: <name as in the field>'.
+    """
+    seen = set()
+
+    def append(name, depth):
+        if depth > _MAX_DEFINITION_DEPTH:
+            raise DefinitionError(f'definition of {type_name!r} nests deeper than '
+                                  f'{_MAX_DEFINITION_DEPTH} levels')
+        text = _msg_text(name)
+        parts = [text]
+        for dependency in msg_dependencies(text, _split_type_name(name)[0]):
+            if dependency in seen:
+                continue
+            seen.add(dependency)
+            parts.append(f'\n{DEFINITION_DELIMITER}\nMSG: {dependency}\n')
+            parts.append(append(dependency, depth + 1))
+        return ''.join(parts)
+
+    return append(type_name, 0)
+
+
+def type_hash(type_name):
+    """Return the RIHS01 type hash of an installed type, or '' when it has none on disk."""
+    path = _interface_file(type_name, '.json')
+    try:
+        description = json.loads(path.read_text(encoding='utf-8'))
+    except (OSError, ValueError):
+        return ''
+    full_name = '{}/{}/{}'.format(*_split_type_name(type_name))
+    for entry in description.get('type_hashes', ()):
+        if entry.get('type_name') == full_name:
+            return entry.get('hash_string', '')
+    return ''
+
+
+def _policy_name(policy):
+    """Return the rmw string of a QoS policy (enum, int-like enum or already a string)."""
+    if isinstance(policy, str):
+        return policy.lower()
+    return policy.name.lower()
+
+
+def _duration(value):
+    """Return {'sec', 'nsec'} of an rclpy Duration, a {'sec', 'nsec'} dict or nanoseconds."""
+    if isinstance(value, dict):
+        return {'sec': int(value['sec']), 'nsec': int(value['nsec'])}
+    nanoseconds = int(getattr(value, 'nanoseconds', value))
+    return {'sec': nanoseconds // 1_000_000_000, 'nsec': nanoseconds % 1_000_000_000}
+
+
+def qos_profile_dict(profile):
+    """Return one QoS profile as rosbag2 serializes it (Jazzy: policies by name)."""
+    return {
+        'history': _policy_name(profile.history),
+        'depth': int(profile.depth),
+        'reliability': _policy_name(profile.reliability),
+        'durability': _policy_name(profile.durability),
+        'deadline': _duration(profile.deadline),
+        'lifespan': _duration(profile.lifespan),
+        'liveliness': _policy_name(profile.liveliness),
+        'liveliness_lease_duration': _duration(profile.liveliness_lease_duration),
+        'avoid_ros_namespace_conventions': bool(profile.avoid_ros_namespace_conventions),
+    }
+
+
+def qos_profiles_yaml(profiles):
+    """
+    Return the ``offered_qos_profiles`` text of a channel: a YAML list, '' for none.
+
+    profiles: rclpy QoSProfile objects (or anything with the same attributes), one per
+    publisher offering on the topic, as rosbag2 records them.
+    """
+    if not profiles:
+        return ''
+    dicts = [qos_profile_dict(profile) for profile in profiles]
+    return yaml.safe_dump(dicts, sort_keys=False, default_flow_style=False).rstrip('\n')
+
+
+class BagWriter:
+    """
+    Append serialized messages to a rosbag2-compatible MCAP bag.
+
+    Not thread-safe: call it from one thread (the recorder's executor). Messages are kept in
+    the current chunk in memory until it is full or ``flush()`` is called; ``close()`` writes
+    the last chunk, the summary and the footer.
+    """
+
+    def __init__(self, path, chunk_size=1024 * 1024, compression='zstd'):
+        """Create the bag at path: 'x.mcap' is one file, any other path a bag directory."""
+        self.bag_path = pathlib.Path(path)
+        if self.bag_path.suffix == '.mcap':
+            self.is_directory = False
+            self.file_path = self.bag_path
+        else:
+            self.is_directory = True
+            self.file_path = self.bag_path / f'{self.bag_path.name}_0.mcap'
+        compression_types = {'zstd': CompressionType.ZSTD, 'lz4': CompressionType.LZ4,
+                             'none': CompressionType.NONE}
+        if compression not in compression_types:
+            raise BagWriteError(f'unknown chunk compression {compression!r}: expected one of '
+                                f'{sorted(compression_types)}')
+        try:
+            if self.is_directory:
+                self.bag_path.mkdir(parents=True, exist_ok=False)
+            else:
+                self.file_path.parent.mkdir(parents=True, exist_ok=True)
+            self._stream = open(self.file_path, 'xb')
+        except OSError as error:
+            raise BagWriteError(f'cannot create bag {self.bag_path}: {error}') from None
+        self._writer = Writer(self._stream, chunk_size=chunk_size,
+                              compression=compression_types[compression])
+        self._writer.start(profile=PROFILE, library=LIBRARY)
+        self._schema_ids = {}
+        self._channels = {}
+        self.message_counts = {}
+        self.first_time = None
+        self.last_time = None
+        self._unflushed = 0
+        self.closed = False
+
+    def __enter__(self):
+        """Return the open writer."""
+        return self
+
+    def __exit__(self, *exc_info):
+        """Close the bag, also after an error, so that it stays readable."""
+        self.close()
+
+    @property
+    def message_count(self):
+        """Return the number of messages written so far."""
+        return sum(self.message_counts.values())
+
+    @property
+    def unflushed_count(self):
+        """Return how many messages are still only in memory."""
+        return self._unflushed
+
+    def has_topic(self, topic):
+        """Return whether a channel exists for topic."""
+        return topic in self._channels
+
+    def add_topic(self, topic, type_name, offered_qos_profiles=''):
+        """
+        Create the channel of topic (and the schema of its type) unless it exists.
+
+        offered_qos_profiles: the YAML text of ``qos_profiles_yaml`` or a list of profiles.
+        """
+        self._check_open()
+        if topic in self._channels:
+            return
+        if not isinstance(offered_qos_profiles, str):
+            offered_qos_profiles = qos_profiles_yaml(offered_qos_profiles)
+        if type_name not in self._schema_ids:
+            definition = message_definition(type_name)
+            self._schema_ids[type_name] = self._writer.register_schema(
+                name=type_name, encoding=SCHEMA_ENCODING, data=definition.encode('utf-8'))
+        channel_id = self._writer.register_channel(
+            topic=topic, message_encoding=MESSAGE_ENCODING,
+            schema_id=self._schema_ids[type_name],
+            metadata={'offered_qos_profiles': offered_qos_profiles,
+                      'topic_type_hash': type_hash(type_name)})
+        self._channels[topic] = (channel_id, type_name, offered_qos_profiles)
+        self.message_counts[topic] = 0
+
+    def write(self, topic, data, log_time=None, publish_time=None):
+        """Append one serialized message of topic; times in ns since the epoch."""
+        self._check_open()
+        channel = self._channels.get(topic)
+        if channel is None:
+            raise BagWriteError(f'topic {topic!r} has no channel in {self.file_path}: '
+                                'call add_topic first')
+        if log_time is None:
+            log_time = time.time_ns()
+        if publish_time is None:
+            publish_time = log_time
+        self._writer.add_message(channel_id=channel[0], log_time=log_time, data=data,
+                                 publish_time=publish_time)
+        self.message_counts[topic] += 1
+        self._unflushed += 1
+        if self.first_time is None or log_time < self.first_time:
+            self.first_time = log_time
+        if self.last_time is None or log_time > self.last_time:
+            self.last_time = log_time
+
+    def flush(self):
+        """Write the chunk in progress and flush the file, so a killed process loses nothing."""
+        self._check_open()
+        if self._unflushed:
+            self._writer.flush()
+            self._unflushed = 0
+
+    def close(self):
+        """Write the last chunk, the summary and the footer (and metadata.yaml); idempotent."""
+        if self.closed:
+            return
+        self.closed = True
+        try:
+            self._writer.finish()
+            self._stream.flush()
+            os.fsync(self._stream.fileno())
+        finally:
+            self._stream.close()
+        self._unflushed = 0
+        if self.is_directory:
+            self._write_metadata_yaml()
+
+    def _check_open(self):
+        if self.closed:
+            raise BagWriteError(f'bag {self.file_path} is already closed')
+
+    def _write_metadata_yaml(self):
+        """Write the rosbag2 metadata.yaml of a bag directory."""
+        start = self.first_time or 0
+        duration = (self.last_time - self.first_time) if self.first_time is not None else 0
+        relative = self.file_path.name
+        topics = []
+        for topic, (_, type_name, qos_text) in self._channels.items():
+            topics.append({
+                'topic_metadata': {
+                    'name': topic,
+                    'type': type_name,
+                    'serialization_format': MESSAGE_ENCODING,
+                    'offered_qos_profiles': yaml.safe_load(qos_text) if qos_text else [],
+                    'type_description_hash': type_hash(type_name),
+                },
+                'message_count': self.message_counts[topic],
+            })
+        metadata = {'rosbag2_bagfile_information': {
+            'version': METADATA_VERSION,
+            'storage_identifier': 'mcap',
+            'duration': {'nanoseconds': duration},
+            'starting_time': {'nanoseconds_since_epoch': start},
+            'message_count': self.message_count,
+            'topics_with_message_count': topics,
+            'compression_format': '',
+            'compression_mode': '',
+            'relative_file_paths': [relative],
+            'files': [{'path': relative,
+                       'starting_time': {'nanoseconds_since_epoch': start},
+                       'duration': {'nanoseconds': duration},
+                       'message_count': self.message_count}],
+            'custom_data': {},
+            'ros_distro': 'jazzy',
+        }}
+        (self.bag_path / 'metadata.yaml').write_text(
+            yaml.safe_dump(metadata, sort_keys=False, default_flow_style=False),
+            encoding='utf-8')
