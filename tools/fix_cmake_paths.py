@@ -1,4 +1,5 @@
-"""Point the CMake files exported by the ROS 2 wheels at this interpreter.
+"""
+Point the CMake files exported by the ROS 2 wheels at this interpreter.
 
 The wheels are built under /opt/python/cp311-cp311, and their exported CMake targets name
 that interpreter's include folders. Any interface package that depends on another message

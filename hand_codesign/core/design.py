@@ -1,4 +1,5 @@
-"""A decoded candidate in physical units: the hand's morphology and its controller.
+"""
+A decoded candidate in physical units: the hand's morphology and its controller.
 
 The genome (hand_codesign.core.genome) decodes into a Design; the simulator builds a Design,
 the URDF export writes one, and a seeded search starts from one. All values are SI: metres,
@@ -55,7 +56,8 @@ class HandDesign:
 
 @dataclass(frozen=True)
 class ControllerDesign:
-    """The control policy's parameters, joints ordered finger by finger, base to tip.
+    """
+    The control policy's parameters, joints ordered finger by finger, base to tip.
 
     kind 'torque': `values` holds joint torques, one row per knot (K x joints); the task's
     policy says whether they are held constant over intervals or interpolated.

@@ -1,4 +1,5 @@
-"""Topic names, message types and QoS of the co-design loop, shared by every node.
+"""
+Topic names, message types and QoS of the co-design loop, shared by every node.
 
 Every topic of the loop is reliable and transient-local with a deep history, so that no
 candidate or evaluation is lost when a population is larger than a default depth, and a

