@@ -1,0 +1,566 @@
+"""
+Read a co-design run back from its bag, without ROS: ``read_run(path) -> RunRecord``.
+
+The bag is the rosbag2-compatible MCAP the recorder writes (one ``.mcap`` file, or a rosbag2
+bag directory holding ``.mcap`` files). Records are read front to back without seeking, so a
+bag whose recorder was killed still gives every complete chunk and message before the cut;
+such a bag comes back with ``truncated=True`` and a warning. A file that is empty, not MCAP,
+or an MCAP bag without hand_codesign topics raises ``BagError`` naming the file and what was
+expected.
+
+Messages are decoded with decoders compiled from the schema text stored in the bag
+(``hand_codesign.analysis.cdr``), falling back to mcap-ros2-support for anything those do not
+handle, and gathered per topic into column tables of numpy arrays.
+"""
+
+import collections
+import dataclasses
+import pathlib
+import struct
+
+from hand_codesign.analysis import cdr
+from mcap.records import Schema
+from mcap_ros2.decoder import DecoderFactory
+import numpy as np
+import yaml
+import zstandard
+
+MCAP_MAGIC = b'\x89MCAP0\r\n'
+MESSAGES_PACKAGE = 'hand_codesign_msgs'
+RUN_INFO_TYPE = 'hand_codesign_msgs/msg/RunInfo'
+CANDIDATE_TYPE = 'hand_codesign_msgs/msg/Candidate'
+EVALUATION_TYPE = 'hand_codesign_msgs/msg/Evaluation'
+EVALUATOR_STATUS_TYPE = 'hand_codesign_msgs/msg/EvaluatorStatus'
+GENERATION_SUMMARY_TYPE = 'hand_codesign_msgs/msg/GenerationSummary'
+LOOP_TYPES = (RUN_INFO_TYPE, CANDIDATE_TYPE, EVALUATION_TYPE, EVALUATOR_STATUS_TYPE,
+              GENERATION_SUMMARY_TYPE)
+
+_OP_HEADER = 0x01
+_OP_FOOTER = 0x02
+_OP_SCHEMA = 0x03
+_OP_CHANNEL = 0x04
+_OP_MESSAGE = 0x05
+_OP_CHUNK = 0x06
+_OP_STATISTICS = 0x0B
+_RECORD_HEAD = struct.Struct('<BQ')
+_U16 = struct.Struct('<H').unpack_from
+_U32 = struct.Struct('<I').unpack_from
+_U64 = struct.Struct('<Q').unpack_from
+_MESSAGE_HEAD = struct.Struct('<HIQQ').unpack_from
+_CHUNK_HEAD = struct.Struct('<QQQI').unpack_from
+# What a damaged record or chunk raises while being read (lz4 raises RuntimeError).
+_DAMAGE_ERRORS = (struct.error, ValueError, UnicodeDecodeError, RuntimeError,
+                  zstandard.ZstdError)
+
+
+class BagError(Exception):
+    """A bag that cannot be read as a hand_codesign run."""
+
+
+@dataclasses.dataclass(frozen=True)
+class RunInfo:
+    """The announcement of a run: everything needed to rebuild its task."""
+
+    run_id: str
+    task_name: str
+    task_yaml: str
+    seed: int
+    algorithm: str
+    iterations: int
+    population: int
+    world_states: int
+    objective_names: tuple
+    versions: tuple
+    resumed_from: str
+    stamp: int          # ns since the epoch, from the message
+    log_time: int       # ns since the epoch, when the recorder received it
+
+
+class Table:
+    """
+    Column table of the messages of one topic, in the order they were recorded.
+
+    Every message field is a column (``table['candidate_id']``): numbers as numpy arrays,
+    strings as object arrays, a numeric list field as a 2-D array when every row has the same
+    length (rows left empty, e.g. of rejected evaluations, are NaN) and else as an object
+    array of 1-D arrays, string lists as tuples. ``log_time`` and ``publish_time`` (ns) come
+    from the bag.
+    """
+
+    def __init__(self, columns, length):
+        """Wrap {name: array} columns of length rows."""
+        self.columns = columns
+        self.length = length
+
+    def __len__(self):
+        """Return the number of rows."""
+        return self.length
+
+    def __getitem__(self, name):
+        """Return the column name."""
+        try:
+            return self.columns[name]
+        except KeyError:
+            raise KeyError(f'no column {name!r}; columns: {list(self.columns)}') from None
+
+    def __contains__(self, name):
+        """Return whether the table has column name."""
+        return name in self.columns
+
+    def row(self, index):
+        """Return row index as a dict."""
+        return {name: column[index] for name, column in self.columns.items()}
+
+    def select(self, mask):
+        """Return the rows where the boolean array mask is true, as a new Table."""
+        mask = np.asarray(mask, dtype=bool)
+        return Table({name: column[mask] for name, column in self.columns.items()},
+                     int(mask.sum()))
+
+
+@dataclasses.dataclass
+class RunRecord:
+    """Everything one run left in its bag, as plain Python and numpy objects."""
+
+    path: str
+    run_id: str
+    run_info: RunInfo           # None when the bag holds no RunInfo of the run
+    candidates: Table
+    evaluations: Table
+    evaluator_status: Table
+    generation_summaries: Table
+    message_counts: dict        # topic -> messages read (all runs), in first-seen order
+    run_ids: tuple              # every run id seen in the bag
+    start_time: int             # log time (ns) of the first and last message read
+    end_time: int
+    truncated: bool = False
+    warnings: list = dataclasses.field(default_factory=list)
+
+    @property
+    def warning(self):
+        """Return all warnings as one text ('' when there are none)."""
+        return '\n'.join(self.warnings)
+
+
+@dataclasses.dataclass
+class _Channel:
+    topic: str
+    schema_name: str
+    schema_encoding: str
+    schema_text: str
+    message_encoding: str
+
+
+class _Scan:
+    """The raw content of an MCAP file: channels and the messages of the channels we want."""
+
+    def __init__(self, path):
+        self.path = path
+        self.profile = None
+        self.schemas = {}
+        self.channels = {}
+        self.messages = collections.defaultdict(list)   # channel id -> [(log, publish, data)]
+        self.counts = collections.Counter()             # channel id -> count
+        self.statistics_count = None
+        self.truncated = False
+        self.damage = []
+
+
+def _string(buffer, pos):
+    length, = _U32(buffer, pos)
+    pos += 4
+    return bytes(buffer[pos:pos + length]).decode('utf-8', 'replace'), pos + length
+
+
+def _bag_files(path):
+    """Return the .mcap files of a bag path (a file or a rosbag2 directory)."""
+    if not path.exists():
+        raise BagError(f'{path}: no such file or directory; expected a .mcap bag written by '
+                       'the hand_codesign recorder')
+    if path.is_file():
+        return [path]
+    metadata_path = path / 'metadata.yaml'
+    if metadata_path.is_file():
+        try:
+            metadata = yaml.safe_load(metadata_path.read_text(encoding='utf-8'))
+            names = metadata['rosbag2_bagfile_information']['relative_file_paths']
+            files = [path / pathlib.PurePath(name).name for name in names]
+        except (yaml.YAMLError, KeyError, TypeError) as error:
+            raise BagError(f'{metadata_path}: not a rosbag2 metadata file ({error})') from None
+        missing = [str(file) for file in files if not file.is_file()]
+        if missing:
+            raise BagError(f'{metadata_path}: lists files that do not exist: {missing}')
+        return files
+    files = sorted(path.glob('*.mcap'))
+    if not files:
+        raise BagError(f'{path}: a directory without .mcap files or metadata.yaml; expected '
+                       'a bag written by the hand_codesign recorder')
+    return files
+
+
+def _scan(path):
+    """Read every record of one MCAP file front to back; stop cleanly where it is cut off."""
+    scan = _Scan(path)
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise BagError(f'{path}: cannot read: {error}') from None
+    if not data:
+        raise BagError(f'{path}: empty file; expected an MCAP bag written by the hand_codesign '
+                       'recorder')
+    if not data.startswith(MCAP_MAGIC):
+        raise BagError(
+            f'{path}: not an MCAP file (it starts with {data[:8]!r}, an MCAP file with '
+            f'{MCAP_MAGIC!r}); expected a bag written by the hand_codesign recorder')
+    view = memoryview(data)
+    end_of_data = len(data)
+    pos = len(MCAP_MAGIC)
+    footer_seen = False
+    while pos + _RECORD_HEAD.size <= end_of_data:
+        opcode, length = _RECORD_HEAD.unpack_from(data, pos)
+        body_start = pos + _RECORD_HEAD.size
+        body_end = body_start + length
+        if body_end > end_of_data:
+            break
+        try:
+            _read_record(scan, opcode, view[body_start:body_end])
+        except _DAMAGE_ERRORS as error:
+            scan.damage.append(f'record at byte {pos} (opcode {opcode:#x}) is damaged: {error}')
+        pos = body_end
+        if opcode == _OP_FOOTER:
+            footer_seen = True
+            break
+    if not footer_seen or data[pos:pos + len(MCAP_MAGIC)] != MCAP_MAGIC:
+        scan.truncated = True
+    return scan
+
+
+def _read_record(scan, opcode, body):
+    """Take what we need from one top-level record (or one record inside a chunk)."""
+    if opcode == _OP_MESSAGE:
+        channel_id, _, log_time, publish_time = _MESSAGE_HEAD(body, 0)
+        scan.counts[channel_id] += 1
+        if channel_id in scan.messages:
+            scan.messages[channel_id].append((log_time, publish_time, bytes(body[22:])))
+    elif opcode == _OP_CHUNK:
+        _read_chunk(scan, body)
+    elif opcode == _OP_SCHEMA:
+        schema_id, = _U16(body, 0)
+        name, pos = _string(body, 2)
+        encoding, pos = _string(body, pos)
+        text, _ = _string(body, pos)
+        scan.schemas.setdefault(schema_id, (name, encoding, text))
+    elif opcode == _OP_CHANNEL:
+        channel_id, schema_id = struct.unpack_from('<HH', body, 0)
+        topic, pos = _string(body, 4)
+        message_encoding, _ = _string(body, pos)
+        if channel_id in scan.channels:
+            return
+        name, encoding, text = scan.schemas.get(schema_id, ('', '', ''))
+        scan.channels[channel_id] = _Channel(topic, name, encoding, text, message_encoding)
+        if name in LOOP_TYPES:
+            scan.messages[channel_id]   # creates the list: messages of this channel are kept
+    elif opcode == _OP_HEADER:
+        scan.profile, _ = _string(body, 0)
+    elif opcode == _OP_STATISTICS:
+        scan.statistics_count, = _U64(body, 0)
+
+
+def _read_chunk(scan, body):
+    """Decompress one chunk and read the records inside it."""
+    _, _, uncompressed_size, _ = _CHUNK_HEAD(body, 0)
+    compression, pos = _string(body, 28)
+    records_length, = _U64(body, pos)
+    pos += 8
+    compressed = body[pos:pos + records_length]
+    if compression == 'zstd':
+        records = zstandard.ZstdDecompressor().decompress(
+            compressed, max_output_size=uncompressed_size)
+    elif compression == 'lz4':
+        import lz4.frame
+        records = lz4.frame.decompress(compressed)
+    elif compression == '':
+        records = compressed
+    else:
+        raise ValueError(f'unknown chunk compression {compression!r}')
+    view = memoryview(records)
+    inner = 0
+    while inner + _RECORD_HEAD.size <= len(records):
+        opcode, length = _RECORD_HEAD.unpack_from(records, inner)
+        start = inner + _RECORD_HEAD.size
+        _read_record(scan, opcode, view[start:start + length])
+        inner = start + length
+
+
+def _decoder(channel):
+    """Return decode(bytes) -> tuple and the field names for the messages of a channel."""
+    try:
+        return (cdr.compile_schema(channel.schema_name, channel.schema_text),
+                cdr.field_names(channel.schema_name, channel.schema_text))
+    except cdr.UnsupportedSchema:
+        return _generic_decoder(channel)
+
+
+def _generic_decoder(channel):
+    """Return the mcap-ros2-support decoder of a channel, giving tuples like the compiled ones."""
+    schema = Schema(id=1, name=channel.schema_name, encoding=channel.schema_encoding,
+                    data=channel.schema_text.encode('utf-8'))
+    generic = DecoderFactory().decoder_for(channel.message_encoding, schema)
+    names = cdr.field_names(channel.schema_name, channel.schema_text)
+
+    def decode(data):
+        message = generic(data)
+        return tuple(_plain(getattr(message, name)) for name in names)
+
+    return decode, names
+
+
+def _plain(value):
+    """Return a generically decoded field in the form of the compiled decoders."""
+    if hasattr(value, 'sec') and hasattr(value, 'nanosec'):
+        return value.sec * 1_000_000_000 + value.nanosec
+    if isinstance(value, (list, tuple)) and value and isinstance(value[0], (int, float)):
+        return np.asarray(value)
+    return value
+
+
+def _decode_channel(channel, rows, problems):
+    """Return (field names, decoded tuples, log times, publish times) of one channel."""
+    decode, names = _decoder(channel)
+    values = []
+    log_times = []
+    publish_times = []
+    failures = 0
+    for log_time, publish_time, data in rows:
+        try:
+            values.append(decode(data))
+        except cdr.UnsupportedSchema:
+            decode, names = _generic_decoder(channel)
+            values.append(decode(data))
+        except (ValueError, struct.error, UnicodeDecodeError, IndexError):
+            failures += 1
+            continue
+        log_times.append(log_time)
+        publish_times.append(publish_time)
+    if failures:
+        problems.append(f'{failures} messages on {channel.topic} could not be decoded and '
+                        'were skipped')
+    return names, values, log_times, publish_times
+
+
+def _column(values):
+    """Return one table column from the list of a field's values."""
+    if not values:
+        return np.array([], dtype=float)
+    first = values[0]
+    if isinstance(first, np.ndarray):
+        lengths = {len(value) for value in values}
+        nonempty = lengths - {0}
+        if len(nonempty) <= 1:
+            width = nonempty.pop() if nonempty else 0
+            dtype = np.result_type(*{value.dtype for value in values})
+            if 0 in lengths and width:
+                dtype = np.result_type(dtype, np.float64)
+                matrix = np.full((len(values), width), np.nan, dtype=dtype)
+                for index, value in enumerate(values):
+                    if len(value):
+                        matrix[index] = value
+                return matrix
+            return np.array(values, dtype=dtype).reshape(len(values), width)
+        column = np.empty(len(values), dtype=object)
+        column[:] = [np.array(value) for value in values]
+        return column
+    if isinstance(first, (list, tuple)):
+        rows = [tuple(value) for value in values]
+        column = np.empty(len(rows), dtype=object)
+        try:
+            # Name lists repeat row after row: rows share one tuple per distinct list.
+            shared = {}
+            column[:] = [shared.setdefault(row, row) for row in rows]
+        except TypeError:   # unhashable rows: lists of nested messages holding arrays
+            column[:] = rows
+        return column
+    if isinstance(first, str):
+        return np.array(values, dtype=object)
+    return np.array(values)
+
+
+def _table(names, values, log_times, publish_times):
+    """Return a Table of decoded tuples."""
+    columns = {'log_time': np.array(log_times, dtype=np.int64),
+               'publish_time': np.array(publish_times, dtype=np.int64)}
+    if values:
+        for name, field_values in zip(names, zip(*values)):
+            columns[name] = _column(list(field_values))
+    else:
+        for name in names:
+            columns[name] = np.array([], dtype=float)
+    return Table(columns, len(values))
+
+
+def _empty_table():
+    return Table({'log_time': np.array([], dtype=np.int64),
+                  'publish_time': np.array([], dtype=np.int64)}, 0)
+
+
+def _concatenate(tables):
+    """Return the rows of several tables of one type (several channels or files) as one."""
+    tables = [table for table in tables if len(table)]
+    if not tables:
+        return _empty_table()
+    if len(tables) == 1:
+        return tables[0]
+    names = list(tables[0].columns)
+    order = np.argsort(np.concatenate([table['log_time'] for table in tables]), kind='stable')
+    columns = {}
+    for name in names:
+        parts = [table.columns.get(name) for table in tables]
+        try:
+            merged = np.concatenate(parts)
+        except ValueError:
+            rows = [row for part in parts for row in part]
+            merged = np.empty(len(rows), dtype=object)
+            merged[:] = rows
+        columns[name] = merged[order]
+    return Table(columns, len(order))
+
+
+def _run_info(table, index):
+    """Return the RunInfo dataclass of row index of the run_info table."""
+    row = table.row(index)
+    return RunInfo(
+        run_id=str(row.get('run_id', '')),
+        task_name=str(row.get('task_name', '')),
+        task_yaml=str(row.get('task_yaml', '')),
+        seed=int(row.get('seed', 0)),
+        algorithm=str(row.get('algorithm', '')),
+        iterations=int(row.get('iterations', 0)),
+        population=int(row.get('population', 0)),
+        world_states=int(row.get('world_states', 0)),
+        objective_names=tuple(row.get('objective_names', ())),
+        versions=tuple(row.get('versions', ())),
+        resumed_from=str(row.get('resumed_from', '')),
+        stamp=int(row.get('stamp', 0)),
+        log_time=int(row['log_time']),
+    )
+
+
+def _choose_run(run_id, tables, warnings):
+    """Return the run to read: the one asked for, else the bag's first announced run."""
+    run_info = tables[RUN_INFO_TYPE]
+    seen = collections.Counter()
+    for table in tables.values():
+        if len(table) and 'run_id' in table:
+            seen.update(run for run in table['run_id'] if run)
+    announced = list(dict.fromkeys(run_info['run_id'])) if len(run_info) else []
+    all_runs = tuple(dict.fromkeys(announced + list(seen)))
+    if run_id is not None:
+        if run_id not in all_runs:
+            raise BagError(f'run {run_id!r} is not in the bag; runs in it: {list(all_runs)}')
+        return run_id, all_runs
+    if announced:
+        chosen = announced[0]
+        if len(announced) > 1:
+            warnings.append(f'the bag announces {len(announced)} runs {announced}; reading the '
+                            f'first, {chosen!r} (pass run_id to choose)')
+        return chosen, all_runs
+    if seen:
+        chosen = seen.most_common(1)[0][0]
+        warnings.append(f'the bag holds no RunInfo; reading run {chosen!r}, the run of most '
+                        'messages')
+        return chosen, all_runs
+    return '', all_runs
+
+
+def read_run(path, run_id=None):
+    """
+    Return the RunRecord of one run of the bag at path (.mcap file or rosbag2 directory).
+
+    run_id selects a run when the bag holds several (default: the first announced run);
+    messages of other runs are counted in ``message_counts`` and otherwise left out.
+    Raises BagError for a missing, empty, non-MCAP or foreign bag.
+    """
+    path = pathlib.Path(path)
+    files = _bag_files(path)
+    scans = [_scan(file) for file in files]
+    warnings = []
+    truncated = False
+    for scan in scans:
+        if scan.truncated:
+            truncated = True
+            warnings.append(
+                f'{scan.path} is truncated (its recorder was probably killed): read '
+                f'{sum(scan.counts.values())} complete messages before the cut, the rest is '
+                'lost')
+        warnings.extend(f'{scan.path}: {problem}' for problem in scan.damage)
+        if scan.profile not in (None, 'ros2'):
+            warnings.append(f'{scan.path}: MCAP profile is {scan.profile!r}, not "ros2"')
+        if (not scan.truncated and scan.statistics_count is not None
+                and scan.statistics_count != sum(scan.counts.values())):
+            warnings.append(f'{scan.path}: its statistics count {scan.statistics_count} '
+                            f'messages but {sum(scan.counts.values())} were found')
+
+    loop_channels = [(scan, channel_id, channel) for scan in scans
+                     for channel_id, channel in scan.channels.items()
+                     if channel.schema_name.startswith(MESSAGES_PACKAGE + '/')]
+    if not loop_channels:
+        found = sorted({f'{channel.topic} [{channel.schema_name or "no schema"}]'
+                        for scan in scans for channel in scan.channels.values()})
+        cut = ' (the file is truncated)' if truncated else ''
+        raise BagError(
+            f'{path}: an MCAP file without hand_codesign topics{cut}; found '
+            f'{found or "no topics"}, expected topics of types {", ".join(LOOP_TYPES)} as '
+            'written by the hand_codesign recorder')
+
+    message_counts = {}
+    for scan in scans:
+        for channel_id, channel in scan.channels.items():
+            message_counts[channel.topic] = (message_counts.get(channel.topic, 0)
+                                             + scan.counts.get(channel_id, 0))
+
+    parts = collections.defaultdict(list)
+    for scan, channel_id, channel in loop_channels:
+        if channel.schema_name not in LOOP_TYPES:
+            continue
+        if channel.schema_encoding != 'ros2msg' or channel.message_encoding != 'cdr':
+            warnings.append(f'{channel.topic}: schema encoding {channel.schema_encoding!r} / '
+                            f'message encoding {channel.message_encoding!r} is not ros2msg / '
+                            'cdr; skipped')
+            continue
+        rows = scan.messages.get(channel_id, [])
+        parts[channel.schema_name].append(_table(*_decode_channel(channel, rows, warnings)))
+    tables = {name: _concatenate(parts[name]) for name in LOOP_TYPES}
+
+    chosen, all_runs = _choose_run(run_id, tables, warnings)
+    for name in LOOP_TYPES:
+        table = tables[name]
+        if not len(table) or 'run_id' not in table:
+            continue
+        keep = table['run_id'] == chosen
+        if name == EVALUATOR_STATUS_TYPE:
+            keep |= table['run_id'] == ''   # evaluators waiting for a run announce ''
+        elif not keep.all():
+            warnings.append(f'left out {int((~keep).sum())} {name.split("/")[-1]} messages of '
+                            'other runs')
+        tables[name] = table.select(keep)
+
+    run_info_table = tables[RUN_INFO_TYPE]
+    run_info = _run_info(run_info_table, 0) if len(run_info_table) else None
+    if run_info is None:
+        warnings.append(f'{path}: no RunInfo of run {chosen!r}: the task and seed are unknown')
+    times = np.concatenate([table['log_time'] for table in tables.values()])
+    return RunRecord(
+        path=str(path),
+        run_id=chosen,
+        run_info=run_info,
+        candidates=tables[CANDIDATE_TYPE],
+        evaluations=tables[EVALUATION_TYPE],
+        evaluator_status=tables[EVALUATOR_STATUS_TYPE],
+        generation_summaries=tables[GENERATION_SUMMARY_TYPE],
+        message_counts=message_counts,
+        run_ids=all_runs,
+        start_time=int(times.min()) if len(times) else 0,
+        end_time=int(times.max()) if len(times) else 0,
+        truncated=truncated,
+        warnings=warnings,
+    )
