@@ -1,0 +1,349 @@
+"""
+Objectives of section III.C in plain numpy: equations (2) to (6).
+
+Objective o is one goal i of the task: `position_i` or `orientation_i`. A single-goal
+objective scores the object's pose at the goal's time; a trajectory objective also scores
+interpolated goals (positions linearly, orientations by slerp) from the previous goal (goal 0
+is the object's nominal start pose at t = 0) at every multiple of 1 / goals.samples_per_second
+(default 0.1 s, the early-termination checks) strictly between the two goal times, and at the
+goal's own time. h_o is the mean of these scores (eq. 5, inner sum).
+
+`GoalSchedule` precomputes all of that once per task: the steps at which the rollout loop
+must read the object pose ("checks"), the target of every goal sample and which checks are
+early-termination checks. The rollout loop only compares its step counter with the next check
+step and calls `Trace.record` there, so nothing is allocated per physics step::
+
+    schedule = goal_schedule(task)
+    trace = schedule.new_trace()
+    next_check = schedule.check_step_list[0]
+    for step in range(1, schedule.num_steps + 1):
+        ...                                   # apply torques, step the physics
+        if step == next_check:
+            position, orientation = client.getBasePositionAndOrientation(body)
+            if trace.record(position, orientation):   # True: early termination
+                break
+            next_check = schedule.next_check_step(trace.count)
+    values = trace.objective_values()        # h_o (eq. 5) or h'_o (eq. 6) of this world
+
+Steps count from 1: the state after step s is the state at time s * time_step.
+
+Early termination (eq. 6): with `early_termination` set, at every multiple of
+1 / checks_per_second (10 per simulated second) the goal samples of that step are compared with
+their margins s_o (d_s for positions, theta_s for orientations); if one misses by more, the
+rollout stops at t_stop. An objective whose goal time T(o) <= t_stop keeps h_o. Otherwise the
+samples scored up to and including t_stop are summed and the not evaluated ones are charged
+s_o each, counted by the proportion a_o = (T(o) - t_stop) / (T(o) - t(o)) of the objective's
+|o| samples: h'_o = (a_o |o| s_o + sum) / |o|. For a single goal (|o| = 1) this is the
+paper's formula as printed; for a trajectory, reading the charge as a_o s_o / |o| instead
+would make stopping early cheaper than finishing, so the proportion counts samples. When the
+rollout stops before an objective's window, a_o > 1: stopping earlier costs more.
+"""
+
+import math
+from typing import Optional
+
+from hand_codesign.core.task import Task, TaskError
+import numpy as np
+
+COLLISION_PENALTY = 10000.0  # every objective of a design that starts in collision (eq. 5)
+
+
+def torque_penalty(torques, threshold, weight):
+    """Return eq. (2): weight * (max |torque| - threshold) if that max exceeds threshold."""
+    torques = np.asarray(torques, dtype=float)
+    if torques.size == 0:
+        return 0.0
+    peak = float(np.max(np.abs(torques)))
+    return weight * (peak - threshold) if peak > threshold else 0.0
+
+
+def task_torque_penalty(task: Task, torques):
+    """Return eq. (2) with the task's tau_p and w (0 when the task sets no penalty)."""
+    spec = task.torque_penalty
+    return 0.0 if spec is None else torque_penalty(torques, spec.threshold, spec.weight)
+
+
+def position_distance(actual, desired, metric='euclidean'):
+    """Return eq. (3): the Euclidean or Manhattan distance over the last axis."""
+    difference = np.asarray(actual, dtype=float) - np.asarray(desired, dtype=float)
+    if metric == 'manhattan':
+        return np.sum(np.abs(difference), axis=-1)
+    return np.sqrt(np.sum(difference * difference, axis=-1))
+
+
+def orientation_angle(actual, desired):
+    """
+    Return eq. (4): the rotation angle arccos(2 <q, q_d>^2 - 1) between unit quaternions.
+
+    In [0, pi]; q and -q give the same angle. The argument is clipped to [-1, 1] so rounding
+    never yields NaN.
+    """
+    inner = np.sum(np.asarray(actual, dtype=float) * np.asarray(desired, dtype=float),
+                   axis=-1)
+    return np.arccos(np.clip(2.0 * inner * inner - 1.0, -1.0, 1.0))
+
+
+def slerp(start, end, fraction):
+    """Return the unit quaternion a `fraction` of the shortest rotation from start to end."""
+    start = np.asarray(start, dtype=float)
+    end = np.asarray(end, dtype=float)
+    inner = float(np.dot(start, end))
+    if inner < 0.0:  # q and -q are one rotation: take the short way round
+        end, inner = -end, -inner
+    if inner > 0.9995:
+        result = start + fraction * (end - start)
+    else:
+        angle = math.acos(min(inner, 1.0))
+        result = (math.sin((1.0 - fraction) * angle) * start
+                  + math.sin(fraction * angle) * end) / math.sin(angle)
+    return result / np.linalg.norm(result)
+
+
+def combine_worlds(world_values, penalty=0.0, collision=False):
+    """
+    Return eq. (5): the objective vector from per-world h_o values (worlds x objectives).
+
+    Every objective is COLLISION_PENALTY for a design that starts in collision, otherwise
+    the torque penalty plus the mean over the worlds.
+    """
+    world_values = np.asarray(world_values, dtype=float)
+    if collision:
+        return np.full(world_values.shape[-1], COLLISION_PENALTY)
+    return penalty + world_values.mean(axis=0)
+
+
+def weighted_fitness(objectives, weights):
+    """Return the weighted sum that single-objective CMA-ES minimizes."""
+    return float(np.dot(np.asarray(objectives, dtype=float), np.asarray(weights, dtype=float)))
+
+
+class GoalSchedule:
+    """
+    When the rollout reads the object pose, and what each reading is scored against.
+
+    Attributes (all read-only): num_steps; check_steps (int array, increasing, >= 1) and
+    check_step_list (the same as Python ints, for the loop); check_times (s); termination
+    (bool per check: an early-termination check); num_objectives, objective_names;
+    objective_start_times t(o), objective_end_times T(o), objective_sizes |o|; margins
+    (s_o per objective, or None without early termination); last_position and
+    last_orientation (the final goals, or the start pose for a kind without goals).
+    """
+
+    def __init__(self, task: Task):
+        self.task_source = task.source
+        self.time_step = task.time_step
+        self.num_steps = task.num_steps
+        self.distance = task.goals.distance
+        self.objective_names = tuple(task.objective_names)
+        start = task.object_spec
+        position_samples = self._samples(task, 'position', np.array(start.position))
+        orientation_samples = self._samples(task, 'orientation',
+                                            np.array(start.orientation))
+        steps = sorted({step for samples in position_samples + orientation_samples
+                        for step, _ in samples[2]})
+        self.check_steps = np.array(steps, dtype=int)
+        self.check_step_list = tuple(int(step) for step in steps)
+        self.check_times = self.check_steps * self.time_step
+        check_of_step = {step: index for index, step in enumerate(steps)}
+        self.num_checks = len(steps)
+        self.num_position = len(position_samples)
+        self.num_objectives = self.num_position + len(orientation_samples)
+        windows = [(s[0], s[1], len(s[2])) for s in position_samples + orientation_samples]
+        self.objective_start_times = np.array([w[0] for w in windows]) * self.time_step
+        self.objective_end_times = np.array([w[1] for w in windows]) * self.time_step
+        self.objective_sizes = np.array([w[2] for w in windows], dtype=float)
+        self._position = self._table(position_samples, check_of_step, 3, 0)
+        self._orientation = self._table(orientation_samples, check_of_step, 4,
+                                        self.num_position)
+        self.termination = np.zeros(self.num_checks, dtype=bool)
+        self.margins = None
+        early = task.early_termination
+        if early is not None:
+            self.position_margin = early.distance
+            self.orientation_margin = early.angle
+            self.margins = np.array([early.distance] * self.num_position
+                                    + [early.angle] * len(orientation_samples))
+            interval = 1.0 / early.checks_per_second
+            count = int(math.floor(task.duration / interval + 1e-9))
+            termination_steps = {int(round(k * interval / self.time_step))
+                                 for k in range(1, count + 1)}
+            self.termination = np.array([step in termination_steps for step in steps],
+                                        dtype=bool)
+        self._termination_list = tuple(bool(flag) for flag in self.termination)
+        self.last_position = np.array(task.goals.position[-1].position
+                                      if task.goals.position else start.position)
+        self.last_orientation = np.array(task.goals.orientation[-1].orientation
+                                         if task.goals.orientation else start.orientation)
+
+    # ---- building
+
+    def _samples(self, task, kind, start_target):
+        """Return per goal: (start step, end step, [(step, target), ...])."""
+        goals = getattr(task.goals, kind)
+        rate = task.goals.samples_per_second
+        result = []
+        previous_step, previous_target = 0, start_target
+        for index, goal in enumerate(goals):
+            target = np.array(getattr(goal, kind), dtype=float)
+            end_step = int(round(goal.time / self.time_step))
+            if end_step <= previous_step:
+                raise TaskError(f'{task.source}: goals.{kind}[{index}].time: expected at '
+                                f'least one time step ({self.time_step} s) after the previous '
+                                f'goal, got {goal.time!r}')
+            steps = [end_step]
+            if goal.trajectory:
+                first = int(math.floor(previous_step * self.time_step * rate + 1e-9)) + 1
+                last = int(math.ceil(end_step * self.time_step * rate - 1e-9)) - 1
+                grid = {int(round(k / rate / self.time_step)) for k in range(first, last + 1)}
+                steps = sorted(s for s in grid if previous_step < s < end_step) + steps
+            samples = []
+            for step in steps:
+                fraction = (step - previous_step) / (end_step - previous_step)
+                if kind == 'position':
+                    value = previous_target + fraction * (target - previous_target)
+                else:
+                    value = slerp(previous_target, target, fraction)
+                samples.append((step, value))
+            result.append((previous_step, end_step, samples))
+            previous_step, previous_target = end_step, target
+        return result
+
+    def _table(self, samples, check_of_step, width, first_objective):
+        """Return sample arrays sorted by check, with each check's [start, end) slice."""
+        rows = [(check_of_step[step], first_objective + objective, target)
+                for objective, (_, _, entries) in enumerate(samples)
+                for step, target in entries]
+        rows.sort(key=lambda row: (row[0], row[1]))
+        checks = np.array([row[0] for row in rows], dtype=int)
+        table = {
+            'check': checks,
+            'objective': np.array([row[1] for row in rows], dtype=int),
+            'target': (np.array([row[2] for row in rows]) if rows
+                       else np.zeros((0, width))),
+            'start': np.searchsorted(checks, np.arange(self.num_checks), side='left'),
+            'end': np.searchsorted(checks, np.arange(self.num_checks), side='right'),
+        }
+        table['start_list'] = tuple(int(v) for v in table['start'])
+        table['end_list'] = tuple(int(v) for v in table['end'])
+        return table
+
+    # ---- the rollout side
+
+    def new_trace(self):
+        """Return an empty Trace (preallocated) for one rollout."""
+        return Trace(self)
+
+    def next_check_step(self, count):
+        """Return the step of check number `count`, or -1 after the last check."""
+        return self.check_step_list[count] if count < self.num_checks else -1
+
+    def should_stop(self, check, position, orientation):
+        """Return True if early termination stops the rollout at check `check`."""
+        if not self._termination_list[check]:
+            return False
+        table = self._position
+        start, end = table['start_list'][check], table['end_list'][check]
+        if end > start:
+            distance = position_distance(position, table['target'][start:end], self.distance)
+            if np.any(distance > self.position_margin):
+                return True
+        table = self._orientation
+        start, end = table['start_list'][check], table['end_list'][check]
+        if end > start:
+            angle = orientation_angle(orientation, table['target'][start:end])
+            if np.any(angle > self.orientation_margin):
+                return True
+        return False
+
+    def sample_errors(self, positions, orientations, num_recorded):
+        """Return (objective index, error) arrays of the samples of the first checks."""
+        parts = []
+        for table, values, measure in (
+                (self._position, positions,
+                 lambda a, b: position_distance(a, b, self.distance)),
+                (self._orientation, orientations, orientation_angle)):
+            count = int(np.searchsorted(table['check'], num_recorded, side='left'))
+            checks = table['check'][:count]
+            errors = measure(np.asarray(values)[checks], table['target'][:count]) \
+                if count else np.zeros(0)
+            parts.append((table['objective'][:count], errors))
+        return (np.concatenate([parts[0][0], parts[1][0]]),
+                np.concatenate([parts[0][1], parts[1][1]]))
+
+    def objective_values(self, positions, orientations, num_recorded,
+                         margins: Optional[np.ndarray] = None):
+        """
+        Return h_o of one world per objective: eq. (5)'s inner mean, or eq. (6) when cut.
+
+        positions (checks x 3) and orientations (checks x 4) hold the object pose read at
+        each check; only the first `num_recorded` rows count. A rollout with fewer rows than
+        checks was cut at the last recorded check (t = 0 if none): goals after it are charged
+        `margins` (default: the task's d_s / theta_s per objective) as eq. (6) says.
+        """
+        objectives, errors = self.sample_errors(positions, orientations, num_recorded)
+        sums = np.bincount(objectives, weights=errors, minlength=self.num_objectives)
+        if num_recorded >= self.num_checks:
+            return sums / self.objective_sizes
+        margins = self.margins if margins is None else np.asarray(margins, dtype=float)
+        if margins is None:
+            raise ValueError('a rollout cut before its last check needs margins s_o; the task '
+                             'has no early_termination')
+        stop_time = self.check_times[num_recorded - 1] if num_recorded > 0 else 0.0
+        end, begin = self.objective_end_times, self.objective_start_times
+        remaining = (end - stop_time) / (end - begin)  # a_o
+        cut = sums / self.objective_sizes + remaining * margins
+        return np.where(end <= stop_time + 1e-12, sums / self.objective_sizes, cut)
+
+    def pose_errors(self, position, orientation):
+        """Return (distance, angle) of a pose from the last position / orientation goal."""
+        return (float(position_distance(position, self.last_position, self.distance)),
+                float(orientation_angle(orientation, self.last_orientation)))
+
+
+class Trace:
+    """The object poses of one rollout at the schedule's checks, preallocated."""
+
+    __slots__ = ('schedule', 'positions', 'orientations', 'count')
+
+    def __init__(self, schedule: GoalSchedule):
+        self.schedule = schedule
+        self.positions = np.zeros((schedule.num_checks, 3))
+        self.orientations = np.zeros((schedule.num_checks, 4))
+        self.count = 0
+
+    def record(self, position, orientation):
+        """Store the pose of the next check; return True if early termination stops here."""
+        check = self.count
+        self.positions[check] = position
+        self.orientations[check] = orientation
+        self.count = check + 1
+        return self.schedule.should_stop(check, position, orientation)
+
+    @property
+    def complete(self):
+        return self.count >= self.schedule.num_checks
+
+    @property
+    def stop_time(self):
+        """Return the time of the last recorded check (0 before the first)."""
+        return float(self.schedule.check_times[self.count - 1]) if self.count else 0.0
+
+    def objective_values(self, margins=None):
+        """Return this world's h_o (or h'_o) per objective."""
+        return self.schedule.objective_values(self.positions, self.orientations, self.count,
+                                              margins)
+
+
+_SCHEDULES = {}
+
+
+def goal_schedule(task: Task) -> GoalSchedule:
+    """Return the GoalSchedule of a task (built once per distinct task and reused)."""
+    key = (task.source_text, task.source, task.time_step, task.duration, task.goals,
+           task.early_termination, task.object_spec)
+    schedule = _SCHEDULES.get(key)
+    if schedule is None:
+        if len(_SCHEDULES) > 64:
+            _SCHEDULES.clear()
+        schedule = _SCHEDULES[key] = GoalSchedule(task)
+    return schedule

@@ -1,0 +1,124 @@
+"""
+Domain-randomized world states (section III.A): variations of the object's initial state.
+
+`world_states(task)` draws a fixed set, uniform in the task's randomization ranges, from a
+numpy Generator seeded with task.seed: every candidate of a run meets the same worlds, and the
+first k worlds of a larger set are the k worlds of a smaller one (one row of draws per world).
+`grid_world_states(task, 5)` puts every randomized quantity (a range of non-zero width) at 5
+evenly spaced values, all combinations: the robustness grid of Fig. 3 (Task 4 randomizes six
+quantities: 5^6 = 15,625 worlds). `object_state(task, world)` is the object's initial state
+in a world, which the simulator builds.
+"""
+
+from dataclasses import dataclass
+import itertools
+from typing import List, Tuple
+
+from hand_codesign.core.task import resting_height, Task
+import numpy as np
+
+QUANTITIES = ('position_x', 'position_y', 'position_z', 'orientation', 'friction', 'scale',
+              'mass')
+
+
+@dataclass(frozen=True)
+class WorldState:
+    """One world: deltas and factors applied to the task's nominal object."""
+
+    position_delta: Tuple[float, float, float]  # m, world axes
+    orientation_delta: float  # rad about task.randomization.orientation_axis
+    friction_delta: float  # added to the object's friction
+    scale: float  # factor on every dimension of the object
+    mass_factor: float  # factor on the object's mass
+
+    @classmethod
+    def nominal(cls):
+        """Return the world without any randomization."""
+        return cls((0.0, 0.0, 0.0), 0.0, 0.0, 1.0, 1.0)
+
+    @classmethod
+    def from_values(cls, values):
+        """Return the world of seven values in QUANTITIES order."""
+        x, y, z, orientation, friction, scale, mass = (float(v) for v in values)
+        return cls((x, y, z), orientation, friction, scale, mass)
+
+
+@dataclass(frozen=True)
+class ObjectState:
+    """The object's initial state in one world, ready to build (world frame, SI units)."""
+
+    position: Tuple[float, float, float]
+    orientation: Tuple[float, float, float, float]  # x, y, z, w
+    scale: float  # factor on the nominal dimensions
+    mass: float  # kg
+    friction: float
+    size: Tuple[float, ...]  # box: (x, y, z) edges; sphere: (radius,); capsule: (radius, length)
+
+
+def _ranges(task: Task):
+    return [bounds for _, bounds in task.randomization.quantities()]
+
+
+def world_states(task: Task, count=None) -> List[WorldState]:
+    """Return the task's worlds (num_world_states or `count`), uniform in the ranges, seeded."""
+    count = task.num_world_states if count is None else int(count)
+    generator = np.random.default_rng(task.seed)
+    uniform = generator.random((count, len(QUANTITIES)))
+    lower = np.array([bounds.lower for bounds in _ranges(task)])
+    width = np.array([bounds.width for bounds in _ranges(task)])
+    return [WorldState.from_values(row) for row in lower + uniform * width]
+
+
+def randomized_quantities(task: Task):
+    """Return the names of the quantities whose range has a non-zero width."""
+    return [name for name, bounds in task.randomization.quantities() if bounds.width > 0]
+
+
+def grid_world_states(task: Task, values_per_quantity=5) -> List[WorldState]:
+    """Return every combination of `values_per_quantity` evenly spaced values per range."""
+    axes = []
+    for bounds in _ranges(task):
+        if bounds.width > 0:
+            axes.append(np.linspace(bounds.lower, bounds.upper, values_per_quantity))
+        else:
+            axes.append(np.array([bounds.lower]))
+    return [WorldState.from_values(values) for values in itertools.product(*axes)]
+
+
+def quaternion_multiply(first, second):
+    """Return the Hamilton product first * second of quaternions (x, y, z, w)."""
+    x1, y1, z1, w1 = first
+    x2, y2, z2, w2 = second
+    return (w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2)
+
+
+def object_state(task: Task, world: WorldState) -> ObjectState:
+    """
+    Return the object's initial state in `world`.
+
+    The orientation delta turns the object about the randomization axis (world frame); an
+    object starting on the plane is then put down on it: its z is the resting height of the
+    scaled, turned object (its position delta along z is zero by validation).
+    """
+    spec = task.object_spec
+    axis = task.randomization.orientation_axis
+    half = world.orientation_delta / 2
+    turn = (axis[0] * np.sin(half), axis[1] * np.sin(half), axis[2] * np.sin(half),
+            np.cos(half))
+    orientation = np.array(quaternion_multiply(turn, spec.orientation), dtype=float)
+    orientation = tuple(float(v) for v in orientation / np.linalg.norm(orientation))
+    position = [float(p + d) for p, d in zip(spec.position, world.position_delta)]
+    if spec.start == 'plane':
+        position[2] = resting_height(spec, world.scale, orientation)
+    if spec.shape == 'box':
+        size = tuple(s * world.scale for s in spec.size)
+    elif spec.shape == 'sphere':
+        size = (spec.radius * world.scale,)
+    else:
+        size = (spec.radius * world.scale, spec.length * world.scale)
+    return ObjectState(position=tuple(position), orientation=orientation, scale=world.scale,
+                       mass=spec.mass * world.mass_factor,
+                       friction=max(0.0, spec.friction + world.friction_delta), size=size)
