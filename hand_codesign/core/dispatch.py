@@ -1,0 +1,144 @@
+"""
+Which evaluator evaluates which candidate: queueing, heartbeats, deadlines, re-dispatch.
+
+The optimizer node drives a Dispatcher with what it hears (heartbeats, evaluations,
+rejections) and the clock, and publishes what `assignments()` returns. Keeping this apart from
+ROS makes the rules testable on their own and usable by any transport.
+
+Rules:
+- an evaluator is alive while its last heartbeat is younger than `heartbeat_timeout`;
+- a live evaluator gets at most `capacity` candidates at once (what it announces), so it
+  always has the next candidate queued while it evaluates one;
+- candidates of an evaluator that died go back to the front of the queue;
+- a candidate unanswered after `evaluation_timeout` is sent again to another evaluator; the
+  first answer wins, later ones are ignored as duplicates;
+- a rejected candidate is sent to an evaluator that has not rejected it, and after
+  `max_attempts` dispatches the dispatcher gives up with DispatchError.
+"""
+
+from collections import deque
+from dataclasses import dataclass, field
+
+
+class DispatchError(RuntimeError):
+    """A candidate could not be evaluated by any evaluator."""
+
+
+@dataclass
+class EvaluatorState:
+    capacity: int
+    last_heard: float
+    assigned: dict = field(default_factory=dict)  # candidate id -> time it was sent
+
+
+@dataclass
+class PendingCandidate:
+    candidate: object
+    attempts: int = 0
+    rejected_by: set = field(default_factory=set)
+    reasons: list = field(default_factory=list)
+
+
+class Dispatcher:
+    """Hand candidates to evaluators and take them back when evaluators fail."""
+
+    def __init__(self, heartbeat_timeout=5.0, evaluation_timeout=120.0, max_attempts=5):
+        self.heartbeat_timeout = heartbeat_timeout
+        self.evaluation_timeout = evaluation_timeout
+        self.max_attempts = max_attempts
+        self.evaluators = {}
+        self._pending = {}
+        self._queue = deque()
+
+    def heard_from(self, evaluator_id, capacity, now):
+        """Record a heartbeat of an evaluator announcing how many candidates it takes."""
+        state = self.evaluators.get(evaluator_id)
+        if state is None:
+            self.evaluators[evaluator_id] = EvaluatorState(max(1, capacity), now)
+        else:
+            state.capacity = max(1, capacity)
+            state.last_heard = now
+
+    def add(self, candidates):
+        """Queue candidates (objects with a `candidate_id`) for evaluation."""
+        for candidate in candidates:
+            self._pending[candidate.candidate_id] = PendingCandidate(candidate)
+            self._queue.append(candidate.candidate_id)
+
+    @property
+    def unfinished(self):
+        """Return how many added candidates have no accepted evaluation yet."""
+        return len(self._pending)
+
+    def live_evaluators(self, now):
+        return [evaluator_id for evaluator_id, state in self.evaluators.items()
+                if now - state.last_heard <= self.heartbeat_timeout]
+
+    def assignments(self, now):
+        """Return the (candidate, evaluator_id, attempt) to send now."""
+        self._reclaim_from_silent(now)
+        self._requeue_overdue(now)
+        sent = []
+        while self._queue:
+            candidate_id = self._queue[0]
+            pending = self._pending.get(candidate_id)
+            if pending is None:
+                self._queue.popleft()
+                continue
+            evaluator_id = self._least_loaded(pending, now)
+            if evaluator_id is None:
+                break
+            self._queue.popleft()
+            if pending.attempts >= self.max_attempts:
+                raise DispatchError(
+                    f'candidate {candidate_id} was dispatched {pending.attempts} times without '
+                    f'an evaluation; rejections: {"; ".join(pending.reasons) or "none"}')
+            self.evaluators[evaluator_id].assigned[candidate_id] = now
+            sent.append((pending.candidate, evaluator_id, pending.attempts))
+            pending.attempts += 1
+        return sent
+
+    def complete(self, candidate_id, evaluator_id):
+        """Accept an evaluation; return False for an unknown or duplicate one."""
+        for state in self.evaluators.values():
+            state.assigned.pop(candidate_id, None)
+        return self._pending.pop(candidate_id, None) is not None
+
+    def reject(self, candidate_id, evaluator_id, reason):
+        """Take back a candidate an evaluator refused, to send it to another one."""
+        pending = self._pending.get(candidate_id)
+        state = self.evaluators.get(evaluator_id)
+        if pending is None or state is None or candidate_id not in state.assigned:
+            return False
+        del state.assigned[candidate_id]
+        pending.rejected_by.add(evaluator_id)
+        pending.reasons.append(f'{evaluator_id}: {reason}')
+        if not any(candidate_id in other.assigned for other in self.evaluators.values()):
+            self._queue.appendleft(candidate_id)
+        return True
+
+    def _least_loaded(self, pending, now):
+        candidates = [
+            (len(state.assigned) / state.capacity, evaluator_id)
+            for evaluator_id, state in self.evaluators.items()
+            if now - state.last_heard <= self.heartbeat_timeout
+            and len(state.assigned) < state.capacity
+            and evaluator_id not in pending.rejected_by
+            and pending.candidate.candidate_id not in state.assigned
+        ]
+        return min(candidates)[1] if candidates else None
+
+    def _reclaim_from_silent(self, now):
+        for state in self.evaluators.values():
+            if now - state.last_heard > self.heartbeat_timeout and state.assigned:
+                for candidate_id in sorted(state.assigned, reverse=True):
+                    self._queue.appendleft(candidate_id)
+                state.assigned.clear()
+
+    def _requeue_overdue(self, now):
+        for state in self.evaluators.values():
+            for candidate_id, sent_at in list(state.assigned.items()):
+                if now - sent_at > self.evaluation_timeout:
+                    # keep the old assignment: whichever evaluator answers first wins
+                    state.assigned[candidate_id] = float('inf')
+                    self._queue.append(candidate_id)

@@ -1,0 +1,39 @@
+"""
+The task a run actually used: the task file's text plus the run's overrides.
+
+A run records the task file's text as loaded and, apart from it, the values its command line
+overrode (seed, budget, world states). Every process that needs the run's task (evaluators,
+replay, analysis, resume) rebuilds it with `run_task`, so they all agree on it exactly.
+"""
+
+import importlib.metadata
+
+from hand_codesign.core.task import parse_task
+
+VERSIONED_PACKAGES = ['hand_codesign', 'pybullet', 'cma', 'deap', 'numpy']
+
+
+def run_task(task_yaml, source, seed, iterations, population, world_states, structure=None):
+    """Return the Task of a run from its task text and overrides (0 or None keeps the file's)."""
+    task = parse_task(task_yaml, source=source)
+    changes = {'seed': int(seed)}
+    if iterations:
+        changes['iterations'] = int(iterations)
+    if population:
+        changes['population'] = int(population)
+    if world_states:
+        changes['num_world_states'] = int(world_states)
+    if structure:
+        changes['structure'] = tuple(int(joints) for joints in structure)
+    return task.replace(**changes)
+
+
+def library_versions():
+    """Return 'name==version' of hand_codesign and the libraries results depend on."""
+    versions = []
+    for name in VERSIONED_PACKAGES:
+        try:
+            versions.append(f'{name}=={importlib.metadata.version(name)}')
+        except importlib.metadata.PackageNotFoundError:
+            versions.append(f'{name}==unknown')
+    return versions

@@ -1,0 +1,42 @@
+"""Per-generation statistics of a run, as the optimizer node publishes and the report plots."""
+
+import numpy as np
+
+
+def generation_summary(generation, structure, names, objectives, result, evaluations,
+                       wall_time, final=False, stop_reason=''):
+    """
+    Return the summary of one told generation as a plain dict.
+
+    objectives: (population, num_objectives) values of this generation; result: the
+    optimizer's OptimizerResult after the tell (best so far, Pareto front for MO-CMA-ES).
+    """
+    objectives = np.asarray(objectives, dtype=float).reshape(-1, len(names))
+    front = getattr(result, 'pareto_objectives', np.zeros((0, len(names))))
+    return {
+        'generation': int(generation),
+        'structure': tuple(int(joints) for joints in structure),
+        'names': tuple(names),
+        'best': objectives.min(axis=0),
+        'median': np.median(objectives, axis=0),
+        'worst': objectives.max(axis=0),
+        'pareto_front': np.asarray(front, dtype=float).reshape(-1, len(names)),
+        'best_id': int(result.candidate_id),
+        'best_objectives': np.asarray(result.objectives, dtype=float),
+        'best_fitness': float(result.fitness),
+        'best_x': np.asarray(result.x, dtype=float),
+        'evaluations': int(evaluations),
+        'wall_time': float(wall_time),
+        'final': bool(final),
+        'stop_reason': stop_reason,
+    }
+
+
+def progress_line(summary, iterations, rate, seconds_left):
+    """Return the one-line progress report of a generation for the terminal."""
+    best = ', '.join(f'{name} {value:.4g}'
+                     for name, value in zip(summary['names'], summary['best_objectives']))
+    structure = 'x'.join(str(joints) for joints in summary['structure'])
+    return (f'generation {summary["generation"] + 1}/{iterations} [{structure}] | '
+            f'{summary["evaluations"]} evaluations, {rate:.1f}/s | best fitness '
+            f'{summary["best_fitness"]:.4g} ({best}) | about {seconds_left:.0f} s left')

@@ -1,0 +1,230 @@
+"""
+The optimizer node: drives the ask/tell search one generation at a time over ROS 2.
+
+It announces the run (RunInfo, latched), waits for evaluators (and a recorder, when asked
+to), sends each candidate to one evaluator through a Dispatcher, collects every evaluation
+by candidate id, tells the optimizer once per generation, publishes a GenerationSummary, and
+ends with the final summary and, when asked, a result file.
+"""
+
+import json
+import os
+import sys
+import time
+
+from hand_codesign.core import genome_spec
+from hand_codesign.core.dispatch import DispatchError
+from hand_codesign.core.dispatch import Dispatcher
+from hand_codesign.core.optimizers import make_optimizer
+from hand_codesign.core.runs import library_versions
+from hand_codesign.core.runs import run_task
+from hand_codesign.core.summary import generation_summary
+from hand_codesign.core.summary import progress_line
+from hand_codesign.core.task import load_task
+from hand_codesign.core.task import TaskError
+from hand_codesign.ros import topics
+from hand_codesign.ros.conversions import candidate_message
+from hand_codesign.ros.conversions import stamp_now
+from hand_codesign.ros.conversions import summary_message
+from hand_codesign_msgs.msg import Evaluation
+from hand_codesign_msgs.msg import RunInfo
+import numpy as np
+import rclpy
+from rclpy.duration import Duration
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.task import Future
+from rcl_interfaces.msg import ParameterDescriptor
+
+PARAMETERS = {
+    'task_file': ('', 'task file (YAML) to optimize'),
+    'seed': (-1, 'run seed; -1 keeps the task file\'s'),
+    'iterations': (0, 'generations; 0 keeps the task file\'s'),
+    'population': (0, 'candidates per generation; 0 keeps the task file\'s'),
+    'world_states': (0, 'randomized worlds per candidate; 0 keeps the task file\'s'),
+    'run_id': ('', 'id of the run; empty: made from the time and process id'),
+    'evaluators_expected': (1, 'evaluators to hear from before the first generation'),
+    'subscribers_expected': (0, 'subscriptions besides evaluators (recorders) to wait for'),
+    'heartbeat_timeout': (5.0, 'seconds of evaluator silence before its candidates move on'),
+    'evaluation_timeout': (0.0, 'seconds before a candidate is sent again; 0: adaptive'),
+    'result_file': ('', 'write the final result as JSON here; empty: do not'),
+}
+
+
+class OptimizerNode(Node):
+
+    def __init__(self):
+        super().__init__('optimizer')
+        for name, (default, description) in PARAMETERS.items():
+            self.declare_parameter(name, default, ParameterDescriptor(description=description))
+        self.finished = Future()
+        self.task = self.load_run_task()
+        self.spec = genome_spec(self.task)
+        self.run_id = (self.param('run_id')
+                       or f'{self.task.name}-{time.strftime("%Y%m%d-%H%M%S")}-{os.getpid()}')
+        self.optimizer = make_optimizer(self.task, dim=self.spec.size)
+        self.dispatcher = Dispatcher(self.param('heartbeat_timeout'),
+                                     self.param('evaluation_timeout') or 3600.0)
+        self.adaptive_timeout = self.param('evaluation_timeout') <= 0
+        self.results = {}
+        self.last_summary = None
+        self.wall_times = []
+        self.started = None
+
+        self.publishers_ = {
+            name: self.create_publisher(topics.MESSAGE_TYPES[name], name, topics.QOS[name])
+            for name in (topics.RUN_INFO, topics.CANDIDATES, topics.GENERATION_SUMMARY)}
+        self.create_subscription(Evaluation, topics.EVALUATIONS, self.on_evaluation,
+                                 topics.QOS[topics.EVALUATIONS])
+        self.create_subscription(topics.MESSAGE_TYPES[topics.EVALUATOR_STATUS],
+                                 topics.EVALUATOR_STATUS, self.on_status,
+                                 topics.QOS[topics.EVALUATOR_STATUS])
+        self.published = dict.fromkeys(self.publishers_, 0)
+        self.publish(topics.RUN_INFO, self.run_info())
+        self.get_logger().info(
+            f'run {self.run_id}: task {self.task.name}, {self.task.algorithm}, '
+            f'{self.task.iterations} generations x {self.task.population}, '
+            f'{self.task.num_world_states} world states, seed {self.task.seed}; '
+            f'waiting for {self.param("evaluators_expected")} evaluator(s)')
+        self.create_timer(0.01, self.tick)
+
+    def param(self, name):
+        return self.get_parameter(name).value
+
+    def load_run_task(self):
+        task_file = self.param('task_file')
+        task = load_task(task_file)
+        seed = self.param('seed')
+        return run_task(task.source_text, task_file, task.seed if seed < 0 else seed,
+                        self.param('iterations'), self.param('population'),
+                        self.param('world_states'))
+
+    def publish(self, topic, message):
+        self.publishers_[topic].publish(message)
+        self.published[topic] += 1
+
+    def run_info(self):
+        task = self.task
+        return RunInfo(
+            run_id=self.run_id, task_name=task.name, task_yaml=task.source_text,
+            seed=task.seed, algorithm=task.algorithm, iterations=task.iterations,
+            population=task.population, world_states=task.num_world_states,
+            objective_names=list(task.objective_names), versions=library_versions(),
+            stamp=stamp_now(self))
+
+    def on_status(self, message):
+        if message.run_id in ('', self.run_id):
+            self.dispatcher.heard_from(message.evaluator_id, message.capacity, time.monotonic())
+
+    def on_evaluation(self, message):
+        if message.run_id != self.run_id:
+            return
+        if message.status == Evaluation.STATUS_REJECTED:
+            if self.dispatcher.reject(message.candidate_id, message.evaluator_id, message.reason):
+                self.get_logger().warning(
+                    f'candidate {message.candidate_id} rejected by {message.evaluator_id}: '
+                    f'{message.reason}')
+            return
+        if self.dispatcher.complete(message.candidate_id, message.evaluator_id):
+            self.results[message.candidate_id] = np.array(message.objectives, dtype=float)
+            self.wall_times.append(message.wall_time)
+
+    def ready_to_start(self):
+        now = time.monotonic()
+        enough_evaluators = (len(self.dispatcher.live_evaluators(now))
+                             >= self.param('evaluators_expected'))
+        wanted = self.param('subscribers_expected')
+        matched = all(publisher.get_subscription_count() >= wanted
+                      for publisher in self.publishers_.values())
+        return enough_evaluators and matched
+
+    def tick(self):
+        if self.finished.done():
+            return
+        if self.started is None:
+            if not self.ready_to_start():
+                return
+            self.started = time.monotonic()
+            self.get_logger().info('evaluators ready, starting')
+        if not self.optimizer.pending:
+            if self.optimizer.stop():
+                self.finish()
+                return
+            self.results = {}
+            self.dispatcher.add(self.optimizer.ask())
+        if self.adaptive_timeout and self.wall_times:
+            self.dispatcher.evaluation_timeout = max(60.0, 20.0 * max(self.wall_times[-50:]))
+        for candidate, evaluator_id, attempt in self.dispatcher.assignments(time.monotonic()):
+            self.publish(topics.CANDIDATES, candidate_message(
+                self.run_id, candidate, self.task.structure, self.spec.names, evaluator_id,
+                attempt))
+        if self.dispatcher.unfinished == 0:
+            self.tell_generation()
+
+    def tell_generation(self):
+        candidates = self.optimizer.pending
+        self.optimizer.tell(self.results)
+        objectives = np.array([self.results[c.candidate_id] for c in candidates])
+        summary = self.summary(candidates[0].generation, objectives)
+        self.last_summary = summary
+        self.publish(topics.GENERATION_SUMMARY, summary_message(self.run_id, summary))
+        elapsed = time.monotonic() - self.started
+        done = self.optimizer.generation
+        left = elapsed / done * (self.task.iterations - done)
+        self.get_logger().info(progress_line(summary, self.task.iterations,
+                                             summary['evaluations'] / elapsed, left))
+
+    def summary(self, generation, objectives, final=False, stop_reason=''):
+        return generation_summary(
+            generation, self.task.structure, self.task.objective_names, objectives,
+            self.optimizer.result, self.optimizer.evaluations,
+            time.monotonic() - self.started, final, stop_reason)
+
+    def finish(self):
+        stop_reason = ', '.join(f'{key}={value}' for key, value in self.optimizer.stop().items())
+        result = self.optimizer.result
+        summary = dict(self.last_summary, final=True, stop_reason=stop_reason,
+                       wall_time=time.monotonic() - self.started)
+        self.publish(topics.GENERATION_SUMMARY, summary_message(self.run_id, summary))
+        for publisher in self.publishers_.values():
+            publisher.wait_for_all_acked(Duration(seconds=5.0))
+        self.write_result(result, stop_reason)
+        self.get_logger().info(f'run {self.run_id} finished ({stop_reason})')
+        self.finished.set_result(True)
+
+    def write_result(self, result, stop_reason):
+        path = self.param('result_file')
+        if not path:
+            return
+        with open(path, 'w', encoding='utf-8') as stream:
+            json.dump({
+                'run_id': self.run_id, 'task': self.task.name, 'seed': self.task.seed,
+                'stop_reason': stop_reason, 'evaluations': self.optimizer.evaluations,
+                'best_candidate_id': result.candidate_id, 'generation': result.generation,
+                'fitness': result.fitness,
+                'objectives': dict(zip(self.task.objective_names, result.objectives.tolist())),
+                'design': self.spec.values(result.x),
+                'published': self.published,
+            }, stream, indent=2)
+
+
+def main(args=None):
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = OptimizerNode()
+        rclpy.spin_until_future_complete(node, node.finished)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (TaskError, DispatchError) as error:
+        print(f'optimizer: error: {error}', file=sys.stderr)
+        return 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
