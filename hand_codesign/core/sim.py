@@ -1,0 +1,281 @@
+"""
+The PyBullet world of a candidate and the one rollout loop.
+
+A Simulator owns one physics client (DIRECT, never the global client). Per candidate,
+`build(task, hand_model)` resets the simulation and builds the ground and the hand, then
+saves that state; per world, `rollout` restores it, creates the world's object (its own
+collision shape: worlds differ in scale, mass, friction and pose), runs the loop and removes
+the object again. Measured on this platform: rebuilding per rollout costs 15-40 %, this costs
+about 1 %; restoreState is bit-identical to a fresh world with deterministicOverlappingPairs;
+resetSimulation per candidate keeps memory flat (create + remove without a reset leaks about
+13 KB per body). Unloading the TinyRenderer plugin (which converts every collision shape into
+a visual shape) makes building a 2x3 hand about 5 times faster; pass rendering=True to keep it
+for getCameraImage.
+
+Physics settings: the task's time step, 50 solver iterations, deterministic overlapping
+pairs, and no split impulse (with split impulse, Bullet's multibody joint limits never push a
+joint back and a fast finger overshoots its limit). Bullet multiplies the friction
+coefficients of two touching bodies; the ground's is 1, so the object slides on the ground
+with its own coefficient and touches the hand with the product of both.
+
+The rollout loop applies the policy's torques to every joint in one TORQUE_CONTROL call each
+step (the default velocity motors are off) and does nothing else per step except compare the
+step counter with the next event. Events: the goal schedule's checks (object pose recorded;
+early termination, eq. 6), a stability watch ten times per simulated second, and frames for
+replay when a callback is given. The rollout ends at the last goal (nothing after it is
+scored) or, with a frame callback, at the task's duration.
+
+Unstable simulation: a non-finite or exploding state (object farther than EXPLOSION_DISTANCE
+from its start, a joint faster than EXPLOSION_JOINT_SPEED) ends the rollout with
+`Rollout.unstable` set; evaluate() charges every objective of that world UNSTABLE_PENALTY.
+
+Start collisions: `start_collisions(objects)` reports whether the hand touches itself
+(non-adjacent links, after performCollisionDetection), the ground or the object of any world
+at the start, penetrating deeper than COLLISION_TOLERANCE.
+"""
+
+from dataclasses import dataclass
+import math
+from typing import Callable, Optional
+
+from hand_codesign.core.hand import build_hand, HandModel
+import pybullet
+from pybullet_utils.bullet_client import BulletClient
+
+GRAVITY = -9.81  # m / s^2 along world z
+SOLVER_ITERATIONS = 50
+GROUND_FRICTION = 1.0
+GROUND_HALF_EXTENTS = (50.0, 50.0, 0.5)  # a box, top face at z = 0 (faster to build than
+# a GEOM_PLANE)
+COLLISION_TOLERANCE = 1e-6  # m of penetration that counts as a start collision
+EXPLOSION_DISTANCE = 100.0  # m from the object's start: the simulation has exploded
+EXPLOSION_JOINT_SPEED = 1e5  # rad / s
+WATCHES_PER_SECOND = 10.0  # stability checks per simulated second
+
+_RECORD, _WATCH, _FRAME = 1, 2, 4
+
+
+@dataclass
+class Rollout:
+    """What one world's rollout produced."""
+
+    trace: object  # objectives.Trace: object poses at the goal checks
+    steps: int  # physics steps simulated
+    unstable: bool
+    final_position: tuple  # object pose at the end (last finite pose if unstable)
+    final_orientation: tuple
+
+
+def object_shape(client, state, shape):
+    """Create the collision shape of an ObjectState of a `shape` object; return its id."""
+    if shape == 'box':
+        return client.createCollisionShape(client.GEOM_BOX,
+                                           halfExtents=[s / 2 for s in state.size])
+    if shape == 'sphere':
+        return client.createCollisionShape(client.GEOM_SPHERE, radius=state.size[0])
+    if shape == 'capsule':
+        return client.createCollisionShape(client.GEOM_CAPSULE, radius=state.size[0],
+                                           height=state.size[1])
+    raise ValueError(f'object shape {shape!r}: expected box, sphere or capsule')
+
+
+class EventPlan:
+    """The steps at which the rollout loop looks at the world, merged and flagged."""
+
+    def __init__(self, schedule, time_step, frame_every=0, num_steps=None):
+        last = schedule.check_step_list[-1] if schedule.num_checks else schedule.num_steps
+        self.num_steps = last if num_steps is None else num_steps
+        events = {}
+        for step in schedule.check_step_list:
+            events[step] = events.get(step, 0) | _RECORD
+        watch = max(1, int(round(1.0 / (WATCHES_PER_SECOND * time_step))))
+        for step in range(watch, self.num_steps + 1, watch):
+            events[step] = events.get(step, 0) | _WATCH
+        if frame_every:
+            for step in range(frame_every, self.num_steps + 1, frame_every):
+                events[step] = events.get(step, 0) | _FRAME
+        ordered = sorted(step for step in events if step <= self.num_steps)
+        self.steps = tuple(ordered) + (-1,)  # -1: no further event
+        self.kinds = tuple(events[step] for step in ordered) + (0,)
+
+
+class Simulator:
+    """A PyBullet client with the scene of one candidate and the rollout loop."""
+
+    def __init__(self, rendering=False):
+        self.client = BulletClient(connection_mode=pybullet.DIRECT)
+        if not rendering:
+            self.client.unloadPlugin(self.client.loadPlugin('tinyRendererPlugin'))
+        self.rendering = rendering
+        self.task = None
+        self.model = None
+        self.hand = self.ground = None
+        self.object_body = None
+        self._saved_state = None
+        self._joints = []
+        self._plans = {}
+
+    def close(self):
+        """Disconnect the physics client."""
+        if self.client is not None:
+            self.client.disconnect()
+            self.client = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        self.close()
+
+    # ---------------------------------------------------------------- scene
+
+    def build(self, task, model: HandModel):
+        """Reset the simulation and build ground and hand of one candidate on `task`."""
+        client = self.client
+        if self._saved_state is not None:
+            client.removeState(self._saved_state)
+            self._saved_state = None
+        client.resetSimulation()
+        client.setPhysicsEngineParameter(fixedTimeStep=task.time_step,
+                                         numSolverIterations=SOLVER_ITERATIONS,
+                                         deterministicOverlappingPairs=1, useSplitImpulse=0)
+        client.setGravity(0.0, 0.0, GRAVITY)
+        ground_shape = client.createCollisionShape(client.GEOM_BOX,
+                                                   halfExtents=GROUND_HALF_EXTENTS)
+        self.ground = client.createMultiBody(
+            0.0, ground_shape, basePosition=(0.0, 0.0, -GROUND_HALF_EXTENTS[2]))
+        client.changeDynamics(self.ground, -1, lateralFriction=GROUND_FRICTION)
+        self.hand = build_hand(client, model, task.hand.base_position,
+                               task.hand.base_orientation)
+        self.task, self.model = task, model
+        self._joints = list(range(model.num_joints))
+        self.object_body = None
+        self._saved_state = client.saveState()
+
+    def start_collisions(self, objects):
+        """
+        Return True if the hand starts in contact with itself, the ground or any object.
+
+        `objects` is a list of (ObjectState, collision shape id) of the worlds.
+        """
+        client = self.client
+        client.performCollisionDetection()
+        depth = -COLLISION_TOLERANCE
+        if any(point[8] < depth for point in client.getContactPoints(self.hand, self.hand)):
+            return True
+        ground_points = client.getClosestPoints(self.hand, self.ground, 0.0)
+        if any(point[8] < depth for point in ground_points):
+            return True
+        for state, shape in objects:
+            points = client.getClosestPoints(self.hand, -1, 0.0, collisionShapeB=shape,
+                                             collisionShapePositionB=state.position,
+                                             collisionShapeOrientationB=state.orientation)
+            if any(point[8] < depth for point in points):
+                return True
+        return False
+
+    def create_object(self, state, shape):
+        """Create the object of one world (an ObjectState) from its collision shape."""
+        body = self.client.createMultiBody(state.mass, shape, basePosition=state.position,
+                                           baseOrientation=state.orientation)
+        self.client.changeDynamics(body, -1, lateralFriction=state.friction)
+        self.object_body = body
+        return body
+
+    def remove_object(self):
+        """Remove the current world's object (the scene is back to the saved state's)."""
+        if self.object_body is not None:
+            self.client.removeBody(self.object_body)
+            self.object_body = None
+
+    # ---------------------------------------------------------------- rollout
+
+    def plan(self, schedule, frame_every=0):
+        """Return the EventPlan of a goal schedule (cached)."""
+        key = (schedule, frame_every)  # schedules compare by identity
+        plan = self._plans.get(key)
+        if plan is None:
+            num_steps = schedule.num_steps if frame_every else None
+            plan = EventPlan(schedule, schedule.time_step, frame_every, num_steps)
+            if len(self._plans) > 16:
+                self._plans.clear()
+            self._plans[key] = plan
+        return plan
+
+    def rollout(self, state, shape, policy, schedule,
+                on_frame: Optional[Callable] = None, frame_every=1):
+        """
+        Run one world from the saved start: return a Rollout.
+
+        `state`/`shape`: the world's ObjectState and its collision shape; `policy`: a policy
+        of hand_codesign.core.policies; `schedule`: the task's objectives.GoalSchedule.
+        `on_frame(step, simulator)` is called at step 0 and every `frame_every` steps (the
+        loop pays nothing for it when it is None).
+        """
+        client = self.client
+        client.restoreState(self._saved_state)
+        body = self.create_object(state, shape)
+        plan = self.plan(schedule, frame_every if on_frame is not None else 0)
+        trace = schedule.new_trace()
+        try:
+            return self._run(body, policy, plan, trace, state, on_frame)
+        finally:
+            self.remove_object()
+
+    def _run(self, body, policy, plan, trace, state, on_frame):
+        client, hand, joints = self.client, self.hand, self._joints
+        torques = policy.start(client, hand, plan.num_steps)
+        set_torques = client.setJointMotorControlArray
+        step_simulation = client.stepSimulation
+        object_pose = client.getBasePositionAndOrientation
+        torque_control = pybullet.TORQUE_CONTROL
+        event_steps, event_kinds = plan.steps, plan.kinds
+        event = 0
+        next_event = event_steps[0]
+        start = state.position
+        last_pose = (tuple(state.position), tuple(state.orientation))
+        unstable = False
+        steps = 0
+        if on_frame is not None:
+            on_frame(0, self)
+        for step in range(1, plan.num_steps + 1):
+            set_torques(hand, joints, torque_control, forces=torques(step - 1))
+            step_simulation()
+            if step != next_event:
+                continue
+            steps = step
+            kind = event_kinds[event]
+            position, orientation = object_pose(body)
+            if not self._stable(position, orientation, start, kind):
+                unstable = True
+                break
+            last_pose = (position, orientation)
+            if kind & _FRAME:
+                on_frame(step, self)
+            if kind & _RECORD and trace.record(position, orientation):
+                break
+            event += 1
+            next_event = event_steps[event]
+        else:
+            steps = plan.num_steps
+            position, orientation = object_pose(body)
+            if self._stable(position, orientation, start, _WATCH):
+                last_pose = (position, orientation)
+            else:
+                unstable = True
+        return Rollout(trace=trace, steps=steps, unstable=unstable,
+                       final_position=tuple(last_pose[0]),
+                       final_orientation=tuple(last_pose[1]))
+
+    def _stable(self, position, orientation, start, kind):
+        """Return False for a non-finite or exploded object, or (at watches) joints."""
+        x, y, z = position
+        if not (math.isfinite(x + y + z + sum(orientation))
+                and (x - start[0]) ** 2 + (y - start[1]) ** 2 + (z - start[2]) ** 2
+                < EXPLOSION_DISTANCE ** 2):
+            return False
+        if kind & _WATCH:
+            for angle, speed, _, _ in self.client.getJointStates(self.hand, self._joints):
+                if not (math.isfinite(angle) and abs(speed) < EXPLOSION_JOINT_SPEED):
+                    return False
+        return True
