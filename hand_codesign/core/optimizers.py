@@ -34,6 +34,7 @@ import cma
 from deap import base as deap_base
 from deap import cma as deap_cma
 from deap import tools as deap_tools
+from hand_codesign.core.genome import seed_genome
 import numpy as np
 
 SIGMA0 = 0.1
@@ -487,17 +488,22 @@ def make_optimizer(task, dim, first_id=0, seed_x=None):
     """
     Return the optimizer of task.algorithm for a genome of `dim` normalized values.
 
-    It takes population, iteration budget, objective weights and seed from the task and starts
-    at `seed_x` (a seeded search) or else at the centre of the bounds.
+    It takes population, iteration budget, objective weights, initial step size and seed from
+    the task. It starts at `seed_x` if given, else at the task's seed design (seeded search,
+    Tasks 1 and 2: the normalized genome of `task.seed_design`), else at the centre of the
+    bounds.
     """
     classes = {'cma': CmaEs, 'mocma': MoCmaEs}
     if task.algorithm not in classes:
         raise OptimizerError(
             f'task {task.name!r}: algorithm must be one of {sorted(classes)}, got '
             f'{task.algorithm!r}')
+    seed = task.seed_design
+    if seed_x is None and seed is not None and seed.hand.structure == tuple(task.structure):
+        seed_x = seed_genome(task)
     return classes[task.algorithm](
         dim, task.objective_weights, task.population, task.iterations, task.seed,
-        first_id=first_id, x0=seed_x)
+        first_id=first_id, x0=seed_x, sigma0=task.initial_sigma)
 
 
 def replay(optimizer, recorded, recorded_x=None):
