@@ -150,22 +150,23 @@ class _Generator:
                 return _align(size) + [f'{variable}, = _unpack_{base}(data, pos)',
                                        f'pos += {size}']
             return [f'{variable}, pos = {self.function_for(base)}(data, pos)']
+        if base == 'string':
+            return self._string_list_lines(variable, field)
         if field.array == 'sequence':
             lines = _align(4) + ['count, = _unpack_uint32(data, pos)', 'pos += 4']
             count = 'count'
         else:
             lines = []
             count = str(field.length)
-        if base == 'string':
-            lines += self._string_list_lines(variable, count)
-        elif base in PRIMITIVES:
+        if base in PRIMITIVES:
             _, size, _ = PRIMITIVES[base]
             # An empty sequence is not padded to its element size.
             alignment = _align(size)
             if alignment and field.array == 'sequence':
                 alignment = [f'if count: {alignment[0]}']
             lines += alignment + [
-                f'{variable} = _np.frombuffer(data, _dtype_{base}, {count}, pos)',
+                f'{variable} = _np.frombuffer(data, _dtype_{base}, {count}, pos) if {count} '
+                f'else _empty_{base}',
                 f'pos += {count} * {size}']
         else:
             function = self.function_for(base)
@@ -175,19 +176,26 @@ class _Generator:
                       f'    {variable}.append(item)']
         return lines
 
-    def _string_list_lines(self, variable, count):
-        # Name lists repeat message after message: when the bytes equal the previous
-        # message's (same alignment), the previous tuple is reused instead of decoding again.
+    def _string_list_lines(self, variable, field):
+        # Name lists repeat message after message: when the bytes of the list (its count
+        # included) equal the previous message's, the previous tuple is reused. The list starts
+        # 4-aligned, so the same bytes always parse to the same strings.
         memo = f'_memo{len(self.memos)}'
         self.memos.append(memo)
+        if field.array == 'sequence':
+            count_lines = ['    count, = _unpack_uint32(data, pos)', '    pos += 4']
+            count = 'count'
+        else:
+            count_lines = []
+            count = str(field.length)
         return [
-            f'previous = {memo}[0]',
+            'pos += -pos & 3',
             'start = pos',
-            f'if previous is not None and start & 3 == {memo}[1] and '
-            f'data[start:start + len({memo}[2])] == {memo}[2]:',
-            f'    {variable} = previous',
-            f'    pos = start + len({memo}[2])',
+            f'if {memo}[0] is not None and data[start:start + len({memo}[1])] == {memo}[1]:',
+            f'    {variable} = {memo}[0]',
+            f'    pos = start + len({memo}[1])',
             'else:',
+        ] + count_lines + [
             '    items = []',
             f'    for _ in range({count}):',
             '        pos += -pos & 3',
@@ -195,7 +203,7 @@ class _Generator:
             '        items.append(data[pos + 4:pos + 3 + length].decode() if length else "")',
             '        pos += 4 + length',
             f'    {variable} = tuple(items)',
-            f'    {memo}[:] = [{variable}, start & 3, bytes(data[start:pos])]',
+            f'    {memo}[:] = [{variable}, bytes(data[start:pos])]',
         ]
 
 
@@ -217,17 +225,20 @@ def compile_schema(schema_name, text):
     """
     Return decode(data: bytes) -> tuple for messages of a ros2msg schema.
 
-    decode raises ``ValueError`` (or ``struct.error``, a subclass of Exception) on a malformed
-    message and ``UnsupportedSchema`` on a big-endian or XCDR2 encapsulation.
+    ``decode.message_end(data)`` gives where the fields end: rmw_serialize reports a length up
+    to 4 bytes longer than the data when a message ends with an empty float64[] sequence.
+    decode raises ``ValueError`` on a malformed message and ``UnsupportedSchema`` (also a
+    ValueError) on a big-endian or XCDR2 encapsulation.
     """
     definitions = split_definitions(schema_name, text)
     generator = _Generator(definitions)
     top = generator.function_for(_normalize(schema_name, ''))
     namespace = {'_np': np}
-    namespace.update({memo: [None, 0, b''] for memo in generator.memos})
+    namespace.update({memo: [None, b''] for memo in generator.memos})
     for name, (fmt, _, dtype) in PRIMITIVES.items():
         namespace[f'_unpack_{name}'] = struct.Struct('<' + fmt).unpack_from
         namespace[f'_dtype_{name}'] = np.dtype(dtype).newbyteorder('<')
+        namespace[f'_empty_{name}'] = np.zeros(0, dtype=dtype)
     exec(compile('\n\n'.join(generator.sources), f'<cdr decoder of {schema_name}>', 'exec'),
          namespace)
     decode_body = namespace[top]
@@ -236,9 +247,17 @@ def compile_schema(schema_name, text):
         if data[:4] not in _CDR_LE_HEADERS:
             raise UnsupportedSchema(f'encapsulation {bytes(data[:4])!r} is not plain '
                                     'little-endian CDR')
-        value, end = decode_body(data, 4)
+        try:
+            value, end = decode_body(data, 4)
+        except struct.error as error:
+            raise ValueError(f'message of {len(data)} bytes ends early: {error}') from None
         if end > len(data):
             raise ValueError(f'message of {len(data)} bytes ends early (needs {end})')
         return value
 
+    def message_end(data):
+        """Return the offset just after the last field of a serialized message."""
+        return decode_body(data, 4)[1]
+
+    decode.message_end = message_end
     return decode
