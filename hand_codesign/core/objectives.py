@@ -27,6 +27,12 @@ step and calls `Trace.record` there, so nothing is allocated per physics step::
 
 Steps count from 1: the state after step s is the state at time s * time_step.
 
+Goals relative to the start (goals.relative_to_start): the schedule holds the goals of the
+nominal start; `new_trace(start)` and `pose_errors(..., start)` take the world's ObjectState
+and map every measured pose back into the nominal start's frame (position minus the world's
+start offset, orientation turned back by the world's start turn), which scores it exactly as
+against goals moved with the world's start. Without that option `start` is ignored.
+
 Early termination (eq. 6): with `early_termination` set, at every multiple of
 1 / checks_per_second (10 per simulated second) the goal samples of that step are compared with
 their margins s_o (d_s for positions, theta_s for orientations); if one misses by more, the
@@ -174,6 +180,9 @@ class GoalSchedule:
                                       if task.goals.position else start.position)
         self.last_orientation = np.array(task.goals.orientation[-1].orientation
                                          if task.goals.orientation else start.orientation)
+        self.relative_to_start = task.goals.relative_to_start
+        self.start_position = np.array(start.position, dtype=float)
+        self.start_orientation = tuple(start.orientation)
 
     # ---- building
 
@@ -229,9 +238,23 @@ class GoalSchedule:
 
     # ---- the rollout side
 
-    def new_trace(self):
-        """Return an empty Trace (preallocated) for one rollout."""
-        return Trace(self)
+    def new_trace(self, start=None):
+        """Return an empty Trace (preallocated) for one rollout from `start` (ObjectState)."""
+        return Trace(self, self.start_transform(start))
+
+    def start_transform(self, start):
+        """
+        Return (offset, turn back) mapping a world's poses to the nominal start, or None.
+
+        None when goals are absolute or no start is given.
+        """
+        if not self.relative_to_start or start is None:
+            return None
+        offset = np.asarray(start.position, dtype=float) - self.start_position
+        # the world's start is turn * nominal, so turn^-1 = nominal * start^-1
+        turn_back = quaternion_multiply(self.start_orientation,
+                                        quaternion_conjugate(start.orientation))
+        return offset, turn_back
 
     def next_check_step(self, count):
         """Return the step of check number `count`, or -1 after the last check."""
@@ -294,8 +317,11 @@ class GoalSchedule:
         cut = sums / self.objective_sizes + remaining * margins
         return np.where(end <= stop_time + 1e-12, sums / self.objective_sizes, cut)
 
-    def pose_errors(self, position, orientation):
-        """Return (distance, angle) of a pose from the last position / orientation goal."""
+    def pose_errors(self, position, orientation, start=None):
+        """Return (distance, angle) of a pose from the last goals (of the world of `start`)."""
+        transform = self.start_transform(start)
+        if transform is not None:
+            position, orientation = _to_nominal(transform, position, orientation)
         return (float(position_distance(position, self.last_position, self.distance)),
                 float(orientation_angle(orientation, self.last_orientation)))
 
@@ -303,17 +329,20 @@ class GoalSchedule:
 class Trace:
     """The object poses of one rollout at the schedule's checks, preallocated."""
 
-    __slots__ = ('schedule', 'positions', 'orientations', 'count')
+    __slots__ = ('schedule', 'positions', 'orientations', 'count', 'transform')
 
-    def __init__(self, schedule: GoalSchedule):
+    def __init__(self, schedule: GoalSchedule, transform=None):
         self.schedule = schedule
         self.positions = np.zeros((schedule.num_checks, 3))
         self.orientations = np.zeros((schedule.num_checks, 4))
         self.count = 0
+        self.transform = transform  # GoalSchedule.start_transform of the world, or None
 
     def record(self, position, orientation):
         """Store the pose of the next check; return True if early termination stops here."""
         check = self.count
+        if self.transform is not None:
+            position, orientation = _to_nominal(self.transform, position, orientation)
         self.positions[check] = position
         self.orientations[check] = orientation
         self.count = check + 1
@@ -332,6 +361,28 @@ class Trace:
         """Return this world's h_o (or h'_o) per objective."""
         return self.schedule.objective_values(self.positions, self.orientations, self.count,
                                               margins)
+
+
+def quaternion_multiply(first, second):
+    """Return the Hamilton product first * second of quaternions (x, y, z, w)."""
+    x1, y1, z1, w1 = first
+    x2, y2, z2, w2 = second
+    return (w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2)
+
+
+def quaternion_conjugate(quaternion):
+    """Return the conjugate (the inverse of a unit quaternion) of (x, y, z, w)."""
+    x, y, z, w = quaternion
+    return (-x, -y, -z, w)
+
+
+def _to_nominal(transform, position, orientation):
+    offset, turn_back = transform
+    return (np.asarray(position, dtype=float) - offset,
+            quaternion_multiply(turn_back, orientation))
 
 
 _SCHEDULES = {}

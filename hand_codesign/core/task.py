@@ -40,6 +40,7 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
     goals:
       distance: euclidean            # euclidean | manhattan, for position goals (eq. 3)
       samples_per_second: 10         # optional: spacing of a trajectory's interpolated goals
+      relative_to_start: false       # optional: true moves each world's goals with its start
       position:                      # goals i = 1..n, strictly increasing times (may be [])
         - {time: 1.5, position: [0, 0, 0.02], trajectory: false}
       orientation:                   # goals i = 1..m (may be []); at least one goal in all
@@ -219,6 +220,10 @@ class GoalSpec:
     position: Tuple[PositionGoal, ...]
     orientation: Tuple[OrientationGoal, ...]
     samples_per_second: float = 10.0
+    # False: goals are absolute world poses. True: goals are given for the nominal start and
+    # each world's goals move with its start (shifted by its position offset, turned by its
+    # orientation delta), so randomizing the start never counts as an error by itself.
+    relative_to_start: bool = False
 
 
 @dataclass(frozen=True)
@@ -652,7 +657,7 @@ class _Reader:
 
     def goals(self, value, key):
         section = self.mapping(value, key, required=('distance', 'position', 'orientation'),
-                               optional=('samples_per_second',))
+                               optional=('samples_per_second', 'relative_to_start'))
         position = self.goal_list(section['position'], _join(key, 'position'), 'position')
         orientation = self.goal_list(section['orientation'], _join(key, 'orientation'),
                                      'orientation')
@@ -662,7 +667,9 @@ class _Reader:
             distance=self.choice(section['distance'], _join(key, 'distance'), DISTANCES),
             position=position, orientation=orientation,
             samples_per_second=self.number(section.get('samples_per_second', 10.0),
-                                           _join(key, 'samples_per_second'), positive=True))
+                                           _join(key, 'samples_per_second'), positive=True),
+            relative_to_start=self.boolean(section.get('relative_to_start', False),
+                                           _join(key, 'relative_to_start')))
 
     def goal_list(self, value, key, kind):
         if not isinstance(value, list):

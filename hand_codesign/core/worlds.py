@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import itertools
 from typing import List, Tuple
 
+from hand_codesign.core.objectives import quaternion_multiply
 from hand_codesign.core.task import resting_height, Task
 import numpy as np
 
@@ -83,16 +84,6 @@ def grid_world_states(task: Task, values_per_quantity=5) -> List[WorldState]:
         else:
             axes.append(np.array([bounds.lower]))
     return [WorldState.from_values(values) for values in itertools.product(*axes)]
-
-
-def quaternion_multiply(first, second):
-    """Return the Hamilton product first * second of quaternions (x, y, z, w)."""
-    x1, y1, z1, w1 = first
-    x2, y2, z2, w2 = second
-    return (w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2)
 
 
 def object_state(task: Task, world: WorldState) -> ObjectState:
