@@ -70,6 +70,21 @@ class ControllerDesign:
     kp: Optional[np.ndarray] = None
     kd: Optional[np.ndarray] = None
 
+    def _identity(self):
+        def as_tuple(array):
+            return None if array is None else (np.shape(array),
+                                               tuple(np.ravel(array).tolist()))
+        return (self.kind, as_tuple(self.values), as_tuple(self.kp), as_tuple(self.kd))
+
+    def __eq__(self, other):
+        # compare the arrays by value (the generated __eq__ fails on numpy arrays)
+        if not isinstance(other, ControllerDesign):
+            return NotImplemented
+        return self._identity() == other._identity()
+
+    def __hash__(self):
+        return hash(self._identity())
+
 
 @dataclass(frozen=True)
 class Design:

@@ -381,20 +381,6 @@ class Task:
         return np.array([self.weights.position] * len(self.goals.position)
                         + [self.weights.orientation] * len(self.goals.orientation))
 
-    def _identity(self):
-        """Return the fields as a hashable tuple (the seed design's arrays as tuples)."""
-        values = [getattr(self, field.name) for field in dataclasses.fields(self)
-                  if field.name != 'seed_design']
-        return tuple(values) + (_design_identity(self.seed_design),)
-
-    def __eq__(self, other):
-        if not isinstance(other, Task):
-            return NotImplemented
-        return self._identity() == other._identity()
-
-    def __hash__(self):
-        return hash(self._identity())
-
     def replace(self, **changes):
         """
         Return a copy with some fields changed, validated like a loaded task.
@@ -410,18 +396,6 @@ class Task:
         task = dataclasses.replace(self, **changes)
         _check_task(task)
         return task
-
-
-def _design_identity(design):
-    if design is None:
-        return None
-    controller = design.controller
-
-    def as_tuple(array):
-        return None if array is None else tuple(np.asarray(array, dtype=float).ravel().tolist())
-
-    return (design.hand, controller.kind, np.shape(controller.values),
-            as_tuple(controller.values), as_tuple(controller.kp), as_tuple(controller.kd))
 
 
 # ---------------------------------------------------------------- loading
