@@ -65,7 +65,8 @@ def sample_messages(run_id='run-1', generations=3, population=12, worlds=3, seed
             evaluations=(generation + 1) * population, wall_time=1.5 * generation,
             final=generation == generations - 1,
             stop_reason='iterations' if generation == generations - 1 else ''))
-    statuses = [EvaluatorStatus(evaluator_id=f'host-{index % 2}', run_id=run_id if index else '',
+    statuses = [EvaluatorStatus(evaluator_id=f'{run_id}-host-{index % 2}',
+                                run_id=run_id if index else '',
                                 host='host', pid=100 + index % 2, capacity=2, load=index % 3,
                                 evaluations_done=index, steps_per_second=25000.0)
                 for index in range(7)]
