@@ -34,7 +34,7 @@ def add_run_arguments(parser):
     parser.add_argument('--evaluators', type=int, default=2,
                         help='evaluator processes to start (default 2)')
     parser.add_argument('--bag', help='where to write the bag (a new folder)')
-    parser.add_argument('--seed', type=int, help='run seed (default: the task file\'s)')
+    parser.add_argument('--seed', type=int, help="run seed (default: the task file's)")
     parser.add_argument('--iterations', type=int, help='generations per structure')
     parser.add_argument('--popsize', type=int, help='candidates per generation')
     parser.add_argument('--world-states', type=int, help='randomized worlds per candidate')

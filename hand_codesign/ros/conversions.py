@@ -17,7 +17,8 @@ def float_list(values):
 def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, attempt):
     """Return the Candidate message sending an optimizer's candidate to an evaluator."""
     return Candidate(
-        run_id=run_id, generation=int(candidate.generation), candidate_id=int(candidate.candidate_id),
+        run_id=run_id, generation=int(candidate.generation),
+        candidate_id=int(candidate.candidate_id),
         evaluator_id=evaluator_id, attempt=int(attempt),
         structure=[int(joints) for joints in structure], genome=float_list(candidate.x),
         genome_names=list(genome_names))

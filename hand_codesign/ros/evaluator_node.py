@@ -14,8 +14,8 @@ import socket
 import threading
 import time
 
-from hand_codesign.core import evaluate
 from hand_codesign.core import genome_spec
+from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.runs import run_task
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import evaluation_message
@@ -23,10 +23,12 @@ from hand_codesign.ros.conversions import rejection_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign_msgs.msg import EvaluatorStatus
 import numpy as np
+from rcl_interfaces.msg import ParameterDescriptor
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rcl_interfaces.msg import ParameterDescriptor
+
+RUN_INFO_WAIT = 10.0
 
 
 class CandidateRejected(Exception):
@@ -53,13 +55,13 @@ class EvaluatorNode(Node):
         self.runs = {}  # run id -> RunInfo message
         self.tasks = {}  # (run id, structure) -> Task
         self.seen = set()  # (run id, candidate id, attempt) already queued
-        self.current_run = ''
         self.done = 0
         self.steps_per_second = 0.0
         self.work = queue.Queue()
         self.busy = 0
         self.published = 0
         self.lock = threading.Lock()
+        self.waiting = {}  # run id -> [(candidate, arrival time)] that overtook their RunInfo
 
         self.evaluations = self.create_publisher(
             topics.MESSAGE_TYPES[topics.EVALUATIONS], topics.EVALUATIONS,
@@ -71,6 +73,7 @@ class EvaluatorNode(Node):
         self.create_subscription(topics.MESSAGE_TYPES[topics.CANDIDATES], topics.CANDIDATES,
                                  self.on_candidate, topics.QOS[topics.CANDIDATES])
         self.create_timer(self.get_parameter('heartbeat_period').value, self.publish_status)
+        self.create_timer(1.0, self.drop_orphans)
         self.worker = threading.Thread(target=self.work_loop, daemon=True)
         self.worker.start()
         self.get_logger().info(f'evaluator {self.evaluator_id} ready')
@@ -79,8 +82,8 @@ class EvaluatorNode(Node):
         if self.wanted_run and message.run_id != self.wanted_run:
             return
         self.runs[message.run_id] = message
-        self.current_run = message.run_id
-        self.publish_status()
+        for candidate, _ in self.waiting.pop(message.run_id, []):
+            self.enqueue(candidate)
 
     def on_candidate(self, message):
         if message.evaluator_id not in ('', self.evaluator_id):
@@ -91,10 +94,25 @@ class EvaluatorNode(Node):
         if key in self.seen:
             return
         self.seen.add(key)
+        if message.run_id in self.runs:
+            self.enqueue(message)
+        else:
+            # a candidate can overtake its run's RunInfo, which travels on another topic
+            self.waiting.setdefault(message.run_id, []).append((message, time.monotonic()))
+
+    def enqueue(self, message):
         with self.lock:
             self.busy += 1
         self.work.put(message)
         self.publish_status()
+
+    def drop_orphans(self):
+        """Queue for rejection the candidates whose RunInfo did not come in time."""
+        now = time.monotonic()
+        for run_id, waiting in list(self.waiting.items()):
+            if now - waiting[0][1] > RUN_INFO_WAIT:
+                for candidate, _ in self.waiting.pop(run_id):
+                    self.enqueue(candidate)
 
     def work_loop(self):
         while rclpy.ok():
@@ -155,7 +173,7 @@ class EvaluatorNode(Node):
             load = self.busy
             done = self.done
         self.status.publish(EvaluatorStatus(
-            evaluator_id=self.evaluator_id, run_id=self.current_run,
+            evaluator_id=self.evaluator_id, run_id=self.wanted_run,
             host=socket.gethostname(), pid=os.getpid(), capacity=self.capacity, load=load,
             evaluations_done=done, steps_per_second=float(self.steps_per_second),
             stamp=stamp_now(self)))

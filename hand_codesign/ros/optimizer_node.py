@@ -13,8 +13,8 @@ import sys
 import time
 
 from hand_codesign.core import genome_spec
-from hand_codesign.core.dispatch import DispatchError
 from hand_codesign.core.dispatch import Dispatcher
+from hand_codesign.core.dispatch import DispatchError
 from hand_codesign.core.optimizers import make_optimizer
 from hand_codesign.core.runs import library_versions
 from hand_codesign.core.runs import run_task
@@ -29,19 +29,19 @@ from hand_codesign.ros.conversions import summary_message
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import RunInfo
 import numpy as np
+from rcl_interfaces.msg import ParameterDescriptor
 import rclpy
 from rclpy.duration import Duration
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.task import Future
-from rcl_interfaces.msg import ParameterDescriptor
 
 PARAMETERS = {
     'task_file': ('', 'task file (YAML) to optimize'),
-    'seed': (-1, 'run seed; -1 keeps the task file\'s'),
-    'iterations': (0, 'generations; 0 keeps the task file\'s'),
-    'population': (0, 'candidates per generation; 0 keeps the task file\'s'),
-    'world_states': (0, 'randomized worlds per candidate; 0 keeps the task file\'s'),
+    'seed': (-1, "run seed; -1 keeps the task file's"),
+    'iterations': (0, "generations; 0 keeps the task file's"),
+    'population': (0, "candidates per generation; 0 keeps the task file's"),
+    'world_states': (0, "randomized worlds per candidate; 0 keeps the task file's"),
     'run_id': ('', 'id of the run; empty: made from the time and process id'),
     'evaluators_expected': (1, 'evaluators to hear from before the first generation'),
     'subscribers_expected': (0, 'subscriptions besides evaluators (recorders) to wait for'),

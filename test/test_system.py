@@ -1,0 +1,159 @@
+"""
+The whole system as a user runs it: `hand-codesign run` with real processes over DDS.
+
+Each run uses its own ROS domain. The runs are small (Task 5, a few candidates and worlds)
+so that the properties are shown in seconds: bit-identical summaries with 1 and 3
+evaluators, a run that survives an evaluator killed with SIGKILL, a bag holding every
+message, and a run undisturbed by messages of a foreign run and malformed ones.
+"""
+
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+from hand_codesign.analysis.bag import read_run
+import numpy as np
+import psutil
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+TASK = ROOT / 'config' / 'tasks' / 'task5.yaml'
+BUDGET = ['--iterations', '3', '--popsize', '6', '--world-states', '3', '--seed', '7']
+SUMMARY_FIELDS = ['generation', 'best', 'median', 'worst', 'pareto_front',
+                  'best_candidate_id', 'best_objectives', 'best_fitness', 'best_genome',
+                  'evaluations', 'final']
+DOMAINS = iter(range(150, 200))
+
+
+def start_run(bag, evaluators, extra=(), budget=BUDGET, domain=None):
+    command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
+               '--evaluators', str(evaluators), '--bag', str(bag),
+               '--domain-id', str(domain or next(DOMAINS)), *budget, *extra]
+    return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
+
+
+def finish(process, timeout=240):
+    output, _ = process.communicate(timeout=timeout)
+    assert process.returncode == 0, output
+    return output
+
+
+def run(bag, evaluators, extra=()):
+    return finish(start_run(bag, evaluators, extra))
+
+
+def summaries(bag):
+    run_id = json.loads((bag / 'result.json').read_text())['run_id']
+    table = read_run(bag, run_id=run_id).generation_summaries
+    return [{name: np.asarray(table[name][row]).tolist() for name in SUMMARY_FIELDS}
+            for row in range(len(table))]
+
+
+@pytest.fixture(scope='module')
+def one_evaluator_run(tmp_path_factory):
+    bag = tmp_path_factory.mktemp('runs') / 'one'
+    output = run(bag, 1)
+    return bag, output
+
+
+def test_run_prints_bag_and_best_design(one_evaluator_run):
+    bag, output = one_evaluator_run
+    assert f'bag: {bag}' in output
+    assert 'best design: candidate' in output
+    assert 'generation 3/3' in output
+    result = json.loads((bag / 'result.json').read_text())
+    assert set(result['objectives']) == {'position_1'} or result['objectives']
+
+
+def test_same_summaries_with_one_and_three_evaluators(one_evaluator_run, tmp_path):
+    bag, _ = one_evaluator_run
+    three = tmp_path / 'three'
+    run(three, 3)
+    assert summaries(bag) == summaries(three)
+    evaluators = set(read_run(three).evaluations['evaluator_id'])
+    assert len(evaluators) >= 2, 'the work was not shared among the evaluators'
+
+
+def test_bag_holds_every_published_message(one_evaluator_run):
+    bag, _ = one_evaluator_run
+    record = read_run(bag)
+    published = json.loads((bag / 'result.json').read_text())['published']
+    assert record.message_counts['/candidates'] == published['candidates']
+    assert record.message_counts['/generation_summary'] == published['generation_summary']
+    assert record.message_counts['/run_info'] == published['run_info'] == 1
+    evaluator_logs = (bag / 'logs').glob('evaluator-*.log')
+    answered = sum(int(line.split(' published ')[1].split()[0])
+                   for log in evaluator_logs for line in log.read_text().splitlines()
+                   if ' published ' in line)
+    assert record.message_counts['/evaluations'] == answered == 3 * 6
+
+
+def test_bag_reads_back_with_independent_readers(one_evaluator_run):
+    bag, _ = one_evaluator_run
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    mcap_file = next(bag.glob('*.mcap'))
+    with open(mcap_file, 'rb') as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        decoded = sum(1 for _ in reader.iter_decoded_messages())
+    assert decoded == sum(read_run(bag).message_counts.values())
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import get_typestore, Stores
+    with AnyReader([bag], default_typestore=get_typestore(Stores.ROS2_JAZZY)) as reader:
+        count = sum(1 for connection, _, raw in reader.messages()
+                    if reader.deserialize(raw, connection.msgtype) is not None)
+    assert count == decoded
+
+
+def evaluator_processes(runner):
+    return [child for child in psutil.Process(runner.pid).children(recursive=True)
+            if 'evaluator_node' in ' '.join(child.cmdline())]
+
+
+def test_killed_evaluator_does_not_change_the_result(one_evaluator_run, tmp_path):
+    bag, _ = one_evaluator_run
+    killed = tmp_path / 'killed'
+    process = start_run(killed, 2, budget=BUDGET)
+    lines = []
+    reader = threading.Thread(target=lambda: lines.extend(process.stdout), daemon=True)
+    reader.start()
+    deadline = time.monotonic() + 120
+    while not any('generation 1/3' in line for line in lines):
+        assert time.monotonic() < deadline and process.poll() is None, ''.join(lines)
+        time.sleep(0.05)
+    victims = evaluator_processes(process)
+    assert len(victims) == 2
+    victims[0].send_signal(signal.SIGKILL)
+    process.wait(timeout=240)
+    reader.join(timeout=10)
+    assert process.returncode == 0, ''.join(lines)
+    record = read_run(killed)
+    told = record.generation_summaries['evaluations'][-1]
+    assert told == 3 * 6
+    ok = record.evaluations.select(record.evaluations['status'] == 0)
+    assert sorted(set(ok['candidate_id'])) == list(range(18))
+    assert summaries(killed) == summaries(bag)
+
+
+def test_foreign_and_malformed_messages_do_not_disturb_a_run(one_evaluator_run, tmp_path):
+    bag, _ = one_evaluator_run
+    disturbed = tmp_path / 'disturbed'
+    domain = next(DOMAINS)
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    # the intruder waits for the run's RunInfo and strikes before the first generation
+    intruder = subprocess.Popen([sys.executable, str(ROOT / 'test' / 'intruder.py')], env=env,
+                                stderr=subprocess.PIPE, text=True)
+    finish(start_run(disturbed, 2, domain=domain))
+    assert intruder.wait(timeout=120) == 0, intruder.stderr.read()
+    assert summaries(disturbed) == summaries(bag)
+    run_id = json.loads((disturbed / 'result.json').read_text())['run_id']
+    record = read_run(disturbed, run_id=run_id)
+    assert 'foreign-run' in record.run_ids
+    rejected = record.evaluations.select(record.evaluations['status'] == 1)
+    assert len(rejected) >= 1 and 'genome' in ' '.join(rejected['reason'])
