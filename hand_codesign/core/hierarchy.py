@@ -393,7 +393,7 @@ def run_hierarchy(task, evaluate_batch, search: Optional[HierarchySearch] = None
 
 def evaluate_candidates(task, candidates):
     """Evaluate candidates one after the other with core.evaluate; return id -> objectives."""
-    from hand_codesign.core import evaluate  # the simulator is imported only when needed
+    from hand_codesign.core.evaluate import evaluate  # imports the simulator only when needed
     return {candidate.candidate_id: evaluate(candidate.x, task).objectives
             for candidate in candidates}
 

@@ -33,7 +33,6 @@ from typing import Mapping
 import cma
 from deap import base as deap_base
 from deap import cma as deap_cma
-from deap import tools as deap_tools
 from hand_codesign.core.genome import seed_genome
 import numpy as np
 
@@ -408,6 +407,17 @@ class _Individual(list):
     """A point of DEAP's MO-CMA-ES: a list of floats with a `fitness` and a `candidate_id`."""
 
 
+class _MultiObjectiveStrategy(deap_cma.StrategyMultiObjective):
+    """DEAP's MO-CMA-ES, also for a single objective (DEAP's non-dominated sort needs two)."""
+
+    def _select(self, candidates):
+        if len(candidates) <= self.mu or len(candidates[0].fitness.values) > 1:
+            return super()._select(candidates)
+        # One objective: the fronts are the distinct values, so keep the mu lowest (stable).
+        ranked = sorted(candidates, key=lambda ind: ind.fitness.values[0])
+        return ranked[:self.mu], ranked[self.mu:]
+
+
 class MoCmaEs(AskTellOptimizer):
     """
     MO-CMA-ES (Igel et al. with Voss et al.'s step size rule) by DEAP's StrategyMultiObjective.
@@ -441,9 +451,9 @@ class MoCmaEs(AskTellOptimizer):
             pareto_ids=ids, pareto_x=xs, pareto_objectives=objectives)
 
     def _pareto_front(self):
-        front = deap_tools.sortLogNondominated(self._strategy.parents, len(self._strategy.parents),
-                                               first_front_only=True)
-        return sorted(front, key=lambda ind: ind.candidate_id)
+        parents = sorted(self._strategy.parents, key=lambda ind: ind.candidate_id)
+        values = np.array([ind.fitness.values for ind in parents])
+        return [parents[i] for i in np.flatnonzero(non_dominated(values))]
 
     def ask(self):
         """Return the candidates of the next generation (the same ones again until told)."""
@@ -464,10 +474,19 @@ class MoCmaEs(AskTellOptimizer):
         for individual, values in zip(points, objectives):
             individual.fitness = _MinimizingFitness(tuple(float(v) for v in values))
         if self._strategy is None:
-            self._strategy = deap_cma.StrategyMultiObjective(
+            self._strategy = _MultiObjectiveStrategy(
                 list(points), sigma=self.sigma0, mu=self.population, lambda_=self.population)
         else:
             self._strategy.update(list(points))
+
+
+def non_dominated(objectives):
+    """Return a boolean mask of the rows (minimized objectives) that no other row dominates."""
+    objectives = np.asarray(objectives, dtype=float)
+    no_worse = np.all(objectives[:, None, :] <= objectives[None, :, :], axis=2)
+    better = np.any(objectives[:, None, :] < objectives[None, :, :], axis=2)
+    dominated = np.any(no_worse & better, axis=0)  # [j, i]: row j dominates row i
+    return ~dominated
 
 
 def closest_to_zero(objectives):
@@ -573,5 +592,5 @@ def _same_np_state(first, second):
 __all__ = [
     'AskTellOptimizer', 'Candidate', 'CmaEs', 'MoCmaEs', 'OptimizerError', 'OptimizerResult',
     'ReplayError', 'SIGMA0', 'TellError', 'closest_to_zero', 'library_seed', 'make_optimizer',
-    'replay',
+    'non_dominated', 'replay',
 ]
