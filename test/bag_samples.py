@@ -1,6 +1,7 @@
 """Sample loop messages, bags written from them, and ROS process helpers for the bag tests."""
 
 import os
+import pathlib
 import subprocess
 import sys
 import threading
@@ -18,7 +19,8 @@ from hand_codesign_msgs.msg import RunInfo
 import numpy as np
 from rclpy.serialization import serialize_message
 
-TASK_YAML = 'name: sample\nseed: 4\nstructure: [2, 2]\n# ünïcödé comment\n'
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+TASK_YAML = (ROOT / 'config' / 'tasks' / 'task5.yaml').read_text() + '# ünïcödé comment\n'
 OBJECTIVES = ['position_1', 'orientation_1']
 
 
@@ -27,7 +29,7 @@ def sample_messages(run_id='run-1', generations=3, population=12, worlds=3, seed
     rng = np.random.default_rng(seed)
     genome_names = [f'finger{f}.segment{s}.length' for f in range(2) for s in range(3)]
     run_info = RunInfo(
-        run_id=run_id, task_name='sample', task_yaml=TASK_YAML, seed=4, algorithm='cma',
+        run_id=run_id, task_name='task5', task_yaml=TASK_YAML, seed=4, algorithm='cma',
         iterations=generations, population=population, world_states=worlds,
         objective_names=OBJECTIVES, versions=['hand_codesign==0.1.0', 'numpy==2.4.6'],
         resumed_from='')

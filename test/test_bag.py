@@ -25,6 +25,9 @@ def test_good_bag_gives_the_run_as_published(tmp_path):
     assert info.task_yaml == TASK_YAML and info.seed == 4 and info.algorithm == 'cma'
     assert info.objective_names == ('position_1', 'orientation_1')
     assert info.stamp == 1_700_000_000 * 10**9 + 123
+    task = info.task()
+    assert (task.name, task.seed, task.iterations, task.population, task.num_world_states) == (
+        'task5', 4, 3, 12, 3)
     assert record.message_counts == {'/' + topic: len(values)
                                      for topic, values in messages.items()}
 

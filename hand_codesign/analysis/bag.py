@@ -19,6 +19,7 @@ import pathlib
 import struct
 
 from hand_codesign.analysis import cdr
+from hand_codesign.core.runs import run_task
 from mcap.records import Schema
 from mcap_ros2.decoder import DecoderFactory
 import numpy as np
@@ -74,6 +75,12 @@ class RunInfo:
     resumed_from: str
     stamp: int          # ns since the epoch, from the message
     log_time: int       # ns since the epoch, when the recorder received it
+
+    def task(self, structure=None, source='bag:run_info'):
+        """Return the Task the run used: its task text with the run's overrides applied."""
+        return run_task(self.task_yaml, source=source, seed=self.seed,
+                        iterations=self.iterations, population=self.population,
+                        world_states=self.world_states, structure=structure)
 
 
 class Table:

@@ -185,12 +185,17 @@ def main(args=None):
     # Our own handlers, not rclpy's: rclpy's would shut the context down at once, before the
     # messages that already arrived are taken and written.
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    early_signals = []
+    signal.signal(signal.SIGINT, lambda number, frame: early_signals.append(number))
+    signal.signal(signal.SIGTERM, lambda number, frame: early_signals.append(number))
     recorder = None
     status = 0
     try:
         recorder = Recorder()
         signal.signal(signal.SIGINT, recorder.request_stop)
         signal.signal(signal.SIGTERM, recorder.request_stop)
+        for number in early_signals:
+            recorder.request_stop(number)
         executor = SingleThreadedExecutor()
         executor.add_node(recorder)
         recorder.spin_until_stopped(executor)
