@@ -236,6 +236,17 @@ class GoalSchedule:
         table['end_list'] = tuple(int(v) for v in table['end'])
         return table
 
+    def goal_samples(self):
+        """Return (objective name, time, target) of every goal sample, by check then objective."""
+        samples = []
+        for table in (self._position, self._orientation):
+            for check, objective, target in zip(table['check'], table['objective'],
+                                                table['target']):
+                samples.append((self.objective_names[objective],
+                                float(self.check_times[check]), target.copy()))
+        samples.sort(key=lambda sample: (sample[1], self.objective_names.index(sample[0])))
+        return samples
+
     # ---- the rollout side
 
     def new_trace(self, start=None):
