@@ -6,13 +6,17 @@ import pickle
 import subprocess
 import sys
 
+from hand_codesign.core import load_task, world_states
+from hand_codesign.core.evaluate import evaluate
+from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.optimizers import (
-    Candidate, closest_to_zero, CmaEs, MoCmaEs, OptimizerError, replay, ReplayError,
-    TellError)
+    Candidate, closest_to_zero, CmaEs, make_optimizer, MoCmaEs, OptimizerError, replay,
+    ReplayError, TellError)
 import numpy as np
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
+TASK5 = ROOT / 'config' / 'tasks' / 'task5.yaml'
 SHIFT = np.linspace(0.2, 0.8, 10)
 
 
@@ -254,3 +258,30 @@ def test_seeded_search_starts_at_the_seed_point():
         points = np.array([c.x for c in algorithm(4, [1.0], 200, 3, seed=0, x0=seed_x).ask()])
         assert np.allclose(points.mean(axis=0), seed_x, atol=0.03)
         assert np.allclose(points.std(axis=0), 0.1, atol=0.03)
+
+
+def test_optimized_task5_design_beats_the_initial_mean_on_unseen_worlds():
+    task = load_task(TASK5).replace(seed=1, iterations=15, population=16, num_world_states=8)
+    spec = genome_spec(task)
+    optimizer = make_optimizer(task, spec.size)
+    assert isinstance(optimizer, CmaEs) and optimizer.stop() == {}
+    run(optimizer, lambda x: evaluate(x, task).objectives)
+    assert optimizer.stop() == {'maxiter': 15}
+
+    unseen = task.replace(seed=99, num_world_states=16)
+    assert not set(world_states(unseen)) & set(world_states(task))
+    initial = evaluate(spec.initial_mean(), unseen)
+    optimized = evaluate(optimizer.result.x, unseen)
+    assert not optimized.collision
+    assert optimized.fitness < 0.8 * initial.fitness
+    assert np.mean(optimized.final_errors[:, 0]) < 0.8 * np.mean(initial.final_errors[:, 0])
+
+
+def test_make_optimizer_follows_the_task():
+    task = load_task(TASK5)
+    optimizer = make_optimizer(task.replace(algorithm='mocma', population=6), 24, first_id=7)
+    assert isinstance(optimizer, MoCmaEs)
+    assert (optimizer.population, optimizer.iterations, optimizer.seed) == (6, 100, task.seed)
+    assert optimizer.sigma0 == task.initial_sigma
+    assert np.array_equal(optimizer.weights, task.objective_weights)
+    assert [c.candidate_id for c in optimizer.ask()] == list(range(7, 13))
