@@ -3,7 +3,8 @@
 import math
 import pathlib
 
-from hand_codesign.core import decode, genome_spec, load_task, objective_names
+from hand_codesign.core import (decode, genome_spec, load_task, objective_names, parse_task,
+                                TaskError)
 from hand_codesign.core.genome import fold, seed_genome
 import numpy as np
 import pytest
@@ -121,6 +122,27 @@ def test_joint_limits_are_sorted_and_hold_the_initial_angle():
     assert joint.lower_limit == pytest.approx(0.2 * math.pi / 2)
     assert joint.upper_limit == pytest.approx(0.8 * math.pi / 2)
     assert joint.initial_angle == pytest.approx(joint.lower_limit)
+
+
+def test_fixed_settings_per_finger_and_joint():
+    text = (TASKS / 'task5.yaml').read_text()
+    text = text.replace('joint_limits: {bounds: [-pi/2, pi/2]}',
+                        'joint_limits: {fixed: [[-1, 1], [-0.5, pi/4]]}')
+    text = text.replace('initial_angle: {bounds: [-pi/2, pi/2]}',
+                        'initial_angle: {fixed: [[0.1, 0.2], 0.3]}')
+    task = parse_task(text, source='fixed.yaml')
+    spec = genome_spec(task)
+    assert spec.size == 12  # segment lengths and torques only
+    fingers = spec.decode(spec.initial_mean()).hand.fingers
+    assert [j.initial_angle for f in fingers for j in f.joints] == [0.1, 0.2, 0.3, 0.3]
+    assert (fingers[1].joints[1].lower_limit, fingers[1].joints[1].upper_limit) == (
+        -0.5, pytest.approx(math.pi / 4))
+    assert (fingers[0].joints[0].lower_limit, fingers[0].joints[0].upper_limit) == (-1, 1)
+    bad = text.replace('initial_angle: {fixed: [[0.1, 0.2], 0.3]}',
+                       'initial_angle: {fixed: [[0.1, 0.2, 0.3], 0.3]}')
+    with pytest.raises(TaskError, match=r'fixed.yaml: morphology.initial_angle: expected 2 '
+                                        r'values for finger 0'):
+        parse_task(bad, source='fixed.yaml')
 
 
 def test_segment_bounds_per_finger_are_divided_by_its_joints():

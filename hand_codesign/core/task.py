@@ -755,14 +755,15 @@ class _Reader:
             friction=setting('friction', minimum=0))
 
     def joint_limits(self, value, key):
-        spec = self.parameter(value, key, angle=True, allow_none=True)
-        if spec.mode == 'fixed':
-            # a fixed setting is a [lower, upper] pair (or one pair per finger)
-            raw = value['fixed']
-            pairs = raw if raw and isinstance(raw[0], list) else [raw]
-            values = tuple(self.bounds(pair, _join(key, 'fixed'), angle=True) for pair in pairs)
-            return ParameterSpec('fixed', values)
-        return spec
+        if isinstance(value, dict) and set(value) == {'fixed'}:
+            # a fixed setting is a [lower, upper] pair, or one pair per finger
+            raw, fixed_key = value['fixed'], _join(key, 'fixed')
+            if isinstance(raw, list) and raw and isinstance(raw[0], list):
+                return ParameterSpec('fixed', tuple(
+                    self.bounds(pair, f'{fixed_key}[{index}]', angle=True)
+                    for index, pair in enumerate(raw)))
+            return ParameterSpec('fixed', (self.bounds(raw, fixed_key, angle=True),))
+        return self.parameter(value, key, angle=True, allow_none=True)
 
     def policy(self, value, key):
         kind = self.choice(value.get('kind') if isinstance(value, dict) else value,
