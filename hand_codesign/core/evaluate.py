@@ -44,7 +44,6 @@ class Evaluation:
 
 
 _SIMULATOR = None
-_SPEC_CACHE = [None, None]  # the last task and its GenomeSpec
 
 
 def shared_simulator():
@@ -55,15 +54,51 @@ def shared_simulator():
     return _SIMULATOR
 
 
-def _genome_spec(task):
-    if _SPEC_CACHE[0] is not task:
-        _SPEC_CACHE[:] = [task, genome_spec(task)]
-    return _SPEC_CACHE[1]
+class _TaskContext:
+    """What every candidate of one task shares: genome, schedule, worlds and their objects."""
+
+    current = None
+
+    def __init__(self, task):
+        self.task = task
+        self.spec = None
+        self.schedule = goal_schedule(task)
+        self.default_worlds = None
+        self.worlds = {}  # tuple of WorldStates -> (object states, initial errors)
+
+    @classmethod
+    def of(cls, task):
+        if cls.current is None or cls.current.task is not task:
+            cls.current = cls(task)
+        return cls.current
+
+    def genome_spec(self):
+        if self.spec is None:
+            self.spec = genome_spec(self.task)
+        return self.spec
+
+    def objects(self, worlds):
+        """Return (object states, initial errors) of a list of worlds (None: the task's)."""
+        if worlds is None:
+            if self.default_worlds is None:
+                self.default_worlds = tuple(world_states(self.task))
+            worlds = self.default_worlds
+        key = tuple(worlds)
+        entry = self.worlds.get(key)
+        if entry is None:
+            states = [object_state(self.task, world) for world in key]
+            initial = np.array([self.schedule.pose_errors(state.position, state.orientation,
+                                                          state)
+                                for state in states]).reshape(len(states), 2)
+            if len(self.worlds) > 8:
+                self.worlds.clear()
+            entry = self.worlds[key] = (states, initial)
+        return entry
 
 
 def evaluate(x, task, worlds: Optional[Sequence] = None) -> 'Evaluation':
     """Return the Evaluation of normalized genome x on `task` (default worlds: the task's)."""
-    design = _genome_spec(task).decode(np.asarray(x, dtype=float))
+    design = _TaskContext.of(task).genome_spec().decode(np.asarray(x, dtype=float))
     return evaluate_design(design, task, worlds)
 
 
@@ -77,25 +112,23 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     is called before each world's rollout and `on_frame(step, simulator)` at its frames
     (see Simulator.rollout).
     """
-    worlds = world_states(task) if worlds is None else list(worlds)
+    context = _TaskContext.of(task)
+    states, initial = context.objects(worlds)
     simulator = shared_simulator() if simulator is None else simulator
-    schedule = goal_schedule(task)
+    schedule = context.schedule
     model = hand_model(design.hand, task.hand)
     policy = make_policy(task.policy, design.controller, model.initial_angles,
                          task.time_step)
     peak = design.controller.values if task.policy.kind == 'torque' else ()
     penalty = task_torque_penalty(task, peak)
     simulator.build(task, model)
-    states = [object_state(task, world) for world in worlds]
     objects = [(state, object_shape(simulator.client, state, task.object_spec.shape))
                for state in states]
-    initial = np.array([schedule.pose_errors(s.position, s.orientation) for s in states])
-    initial = initial.reshape(len(states), 2)
     num_objectives = schedule.num_objectives
     if simulator.start_collisions(objects):
         world_values = np.full((len(states), num_objectives), COLLISION_PENALTY)
         return _evaluation(task, combine_worlds(world_values, collision=True), world_values,
-                           True, 0, 0.0, initial, initial.copy())
+                           True, 0, 0.0, initial.copy(), initial.copy())
     world_values = np.empty((len(states), num_objectives))
     final = np.empty((len(states), 2))
     unstable_worlds, steps = 0, 0
@@ -109,10 +142,11 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
             world_values[index] = UNSTABLE_PENALTY
         else:
             world_values[index] = result.trace.objective_values()
-        final[index] = schedule.pose_errors(result.final_position, result.final_orientation)
+        final[index] = schedule.pose_errors(result.final_position, result.final_orientation,
+                                            state)
     objectives = combine_worlds(world_values, penalty)
     return _evaluation(task, objectives, world_values, False, unstable_worlds,
-                       steps * task.time_step, initial, final)
+                       steps * task.time_step, initial.copy(), final)
 
 
 def _evaluation(task, objectives, world_values, collision, unstable_worlds, simulated_time,

@@ -153,9 +153,25 @@ def _palm_xml(model):
             + '  </link>\n')
 
 
-def _segment_xml(model, link):
-    geometry = f'<capsule radius="{link.radius!r}" length="{link.cylinder_height!r}"/>'
+def _capsule_xml(link, element, capsules):
+    """Return the capsule of a segment as <visual> or <collision> element(s)."""
     origin = f'<origin xyz="{_vector(link.centre)}" rpy="{_vector(_CAPSULE_RPY)}"/>'
+    if capsules:
+        geometry = f'<capsule radius="{link.radius!r}" length="{link.cylinder_height!r}"/>'
+        return (f'    <{element}>\n      {origin}\n      <geometry>{geometry}</geometry>\n'
+                f'    </{element}>\n')
+    # The same solid from the shapes of the URDF specification: a cylinder and two spheres.
+    parts = [f'    <{element}>\n      {origin}\n      <geometry><cylinder '
+             f'radius="{link.radius!r}" length="{link.cylinder_height!r}"/></geometry>\n'
+             f'    </{element}>\n'] if link.cylinder_height > 0 else []
+    for end in (link.radius, link.length - link.radius):
+        parts.append(f'    <{element}>\n      <origin xyz="{_vector((0.0, end, 0.0))}" '
+                     f'rpy="0 0 0"/>\n      <geometry><sphere radius="{link.radius!r}"/>'
+                     f'</geometry>\n    </{element}>\n')
+    return ''.join(parts)
+
+
+def _segment_xml(model, link, capsules):
     parent = 'palm' if link.parent < 0 else model.links[link.parent].name
     if link.lower_limit is None:
         joint_type, limit = 'continuous', ''
@@ -164,10 +180,8 @@ def _segment_xml(model, link):
         limit = f' lower="{link.lower_limit!r}" upper="{link.upper_limit!r}"'
     return (f'  <link name={quoteattr(link.name)}>\n' + _contact_xml(model.friction)
             + _inertial_xml(link.mass, link.centre, link.inertia)
-            + f'    <visual>\n      {origin}\n      <geometry>{geometry}</geometry>\n'
-            + '    </visual>\n'
-            + f'    <collision>\n      {origin}\n      <geometry>{geometry}</geometry>\n'
-            + '    </collision>\n  </link>\n'
+            + _capsule_xml(link, 'visual', capsules)
+            + _capsule_xml(link, 'collision', capsules) + '  </link>\n'
             + f'  <joint name={quoteattr(link.joint_name)} type="{joint_type}">\n'
             + f'    <parent link={quoteattr(parent)}/>\n'
             + f'    <child link={quoteattr(link.name)}/>\n'
@@ -177,17 +191,23 @@ def _segment_xml(model, link):
             + '  </joint>\n')
 
 
-def model_urdf(model: HandModel, name='hand'):
-    """Return the URDF text of a hand model (initial angles are not part of URDF)."""
+def model_urdf(model: HandModel, name='hand', capsules=True):
+    """
+    Return the URDF text of a hand model (initial angles are not part of URDF).
+
+    capsules=True writes the segments as <capsule> elements, which PyBullet reads (the
+    simulated hand); capsules=False writes each as a cylinder between two spheres, the same
+    solid in the shapes of the URDF specification, for parsers that know only those.
+    """
     parts = ['<?xml version="1.0"?>\n', f'<robot name={quoteattr(name)}>\n', _palm_xml(model)]
-    parts.extend(_segment_xml(model, link) for link in model.links)
+    parts.extend(_segment_xml(model, link, capsules) for link in model.links)
     parts.append('</robot>\n')
     return ''.join(parts)
 
 
-def hand_urdf(design: HandDesign, hand_spec: HandSpec, name='hand'):
+def hand_urdf(design: HandDesign, hand_spec: HandSpec, name='hand', capsules=True):
     """Return the URDF text of a hand design with the task's fixed sizes (task.hand)."""
-    return model_urdf(hand_model(design, hand_spec), name)
+    return model_urdf(hand_model(design, hand_spec), name, capsules)
 
 
 def build_hand(client, model: HandModel, base_position=(0.0, 0.0, 0.0),

@@ -21,9 +21,10 @@ with its own coefficient and touches the hand with the product of both.
 The rollout loop applies the policy's torques to every joint in one TORQUE_CONTROL call each
 step (the default velocity motors are off) and does nothing else per step except compare the
 step counter with the next event. Events: the goal schedule's checks (object pose recorded;
-early termination, eq. 6), a stability watch ten times per simulated second, and frames for
-replay when a callback is given. The rollout ends at the last goal (nothing after it is
-scored) or, with a frame callback, at the task's duration.
+early termination, eq. 6), a stability watch ten times per simulated second (the object; the
+joints once a second and at the end), and frames for replay when a callback is given. The
+rollout ends at the last goal (nothing after it is scored) or, with a frame callback, at the
+task's duration.
 
 Unstable simulation: a non-finite or exploding state (object farther than EXPLOSION_DISTANCE
 from its start, a joint faster than EXPLOSION_JOINT_SPEED) ends the rollout with
@@ -50,9 +51,10 @@ GROUND_HALF_EXTENTS = (50.0, 50.0, 0.5)  # a box, top face at z = 0 (faster to b
 COLLISION_TOLERANCE = 1e-6  # m of penetration that counts as a start collision
 EXPLOSION_DISTANCE = 100.0  # m from the object's start: the simulation has exploded
 EXPLOSION_JOINT_SPEED = 1e5  # rad / s
-WATCHES_PER_SECOND = 10.0  # stability checks per simulated second
+WATCHES_PER_SECOND = 10.0  # object stability checks per simulated second
+JOINT_WATCH_EVERY = 10  # joints are checked at every 10th watch (once a second) and at the end
 
-_RECORD, _WATCH, _FRAME = 1, 2, 4
+_RECORD, _WATCH, _JOINT_WATCH, _FRAME = 1, 2, 4, 8
 
 
 @dataclass
@@ -91,6 +93,9 @@ class EventPlan:
         watch = max(1, int(round(1.0 / (WATCHES_PER_SECOND * time_step))))
         for step in range(watch, self.num_steps + 1, watch):
             events[step] = events.get(step, 0) | _WATCH
+        for step in range(watch * JOINT_WATCH_EVERY, self.num_steps + 1,
+                          watch * JOINT_WATCH_EVERY):
+            events[step] |= _JOINT_WATCH
         if frame_every:
             for step in range(frame_every, self.num_steps + 1, frame_every):
                 events[step] = events.get(step, 0) | _FRAME
@@ -216,7 +221,7 @@ class Simulator:
         client.restoreState(self._saved_state)
         body = self.create_object(state, shape)
         plan = self.plan(schedule, frame_every if on_frame is not None else 0)
-        trace = schedule.new_trace()
+        trace = schedule.new_trace(state)
         try:
             return self._run(body, policy, plan, trace, state, on_frame)
         finally:
@@ -246,7 +251,7 @@ class Simulator:
             steps = step
             kind = event_kinds[event]
             position, orientation = object_pose(body)
-            if not self._stable(position, orientation, start, kind):
+            if not self._stable(position, orientation, start, kind & _JOINT_WATCH):
                 unstable = True
                 break
             last_pose = (position, orientation)
@@ -259,7 +264,7 @@ class Simulator:
         else:
             steps = plan.num_steps
             position, orientation = object_pose(body)
-            if self._stable(position, orientation, start, _WATCH):
+            if self._stable(position, orientation, start, True):
                 last_pose = (position, orientation)
             else:
                 unstable = True
@@ -267,14 +272,14 @@ class Simulator:
                        final_position=tuple(last_pose[0]),
                        final_orientation=tuple(last_pose[1]))
 
-    def _stable(self, position, orientation, start, kind):
-        """Return False for a non-finite or exploded object, or (at watches) joints."""
+    def _stable(self, position, orientation, start, check_joints):
+        """Return False for a non-finite or exploded object or (if asked) hand."""
         x, y, z = position
         if not (math.isfinite(x + y + z + sum(orientation))
                 and (x - start[0]) ** 2 + (y - start[1]) ** 2 + (z - start[2]) ** 2
                 < EXPLOSION_DISTANCE ** 2):
             return False
-        if kind & _WATCH:
+        if check_joints:
             for angle, speed, _, _ in self.client.getJointStates(self.hand, self._joints):
                 if not (math.isfinite(angle) and abs(speed) < EXPLOSION_JOINT_SPEED):
                     return False
