@@ -6,12 +6,14 @@ import pickle
 import subprocess
 import sys
 
+from deap import tools as deap_tools
 from hand_codesign.core import load_task, world_states
+from hand_codesign.core import optimizers
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.optimizers import (
-    Candidate, closest_to_zero, CmaEs, make_optimizer, MoCmaEs, OptimizerError, replay,
-    ReplayError, TellError)
+    Candidate, closest_to_zero, CmaEs, least_hypervolume_contributor, make_optimizer, MoCmaEs,
+    non_dominated, OptimizerError, replay, ReplayError, TellError)
 import numpy as np
 import pytest
 
@@ -285,3 +287,23 @@ def test_make_optimizer_follows_the_task():
     assert optimizer.sigma0 == task.initial_sigma
     assert np.array_equal(optimizer.weights, task.objective_weights)
     assert [c.candidate_id for c in optimizer.ask()] == list(range(7, 13))
+
+
+def test_fast_hypervolume_indicator_agrees_with_deap():
+    rng = np.random.default_rng(0)
+    for trial in range(100):
+        first = rng.random(int(rng.integers(2, 30)))
+        points = np.c_[first, 1.0 - first ** rng.uniform(0.3, 3.0)]
+        if trial % 3 == 0:
+            points = np.round(points, 1)  # ties and duplicates
+        points = points[non_dominated(points)]
+        front = [_individual(point) for point in points]
+        reference = points.max(axis=0) + 1.0
+        assert (least_hypervolume_contributor(front, ref=reference) ==
+                deap_tools.hypervolume(front, ref=reference))
+
+
+def _individual(values):
+    individual = optimizers._Individual(list(values))
+    individual.fitness = optimizers._MinimizingFitness(tuple(values))
+    return individual
