@@ -62,7 +62,7 @@ def test_initial_mean_decodes_to_the_centre_of_the_bounds():
     design = spec.decode(spec.initial_mean())
     assert design.hand.structure == (2, 2)
     finger = design.hand.fingers[1]
-    assert finger.position == (0.055, 0.0)
+    assert finger.position == (0.07, 0.0)
     assert finger.segment_lengths == pytest.approx((0.065, 0.065))
     assert finger.joints[0].axis_angle == pytest.approx(math.pi / 2)
     assert design.hand.friction == 0.8
