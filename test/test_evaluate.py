@@ -1,0 +1,113 @@
+"""evaluate(x, task): the contract's Evaluation, pure and bit-identical across processes."""
+
+import json
+import pathlib
+import subprocess
+import sys
+
+from hand_codesign.core import (evaluate, Evaluation, genome_spec, load_task, objective_names,
+                                world_states)
+import numpy as np
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+TASKS = ROOT / 'config' / 'tasks'
+PRESETS = sorted(path.name for path in TASKS.glob('*.yaml'))
+
+# Evaluates genomes of Task 5 in the order given on the command line, after a Task 6
+# candidate, and prints every float of the results exactly (hex).
+SCRIPT = """
+import json, sys
+import numpy as np
+from hand_codesign.core import evaluate, genome_spec, load_task
+tasks = sys.argv[1]
+task = load_task(tasks + '/task5.yaml').replace(num_world_states=3)
+other = load_task(tasks + '/task6.yaml').replace(num_world_states=2)
+evaluate(genome_spec(other).initial_mean() + 0.05, other)
+genomes = json.loads(sys.argv[2])
+results = {}
+for index in json.loads(sys.argv[3]):
+    result = evaluate(np.array(genomes[index]), task)
+    values = np.concatenate([result.objectives, result.world_objectives.ravel(),
+                             result.final_errors.ravel(), [result.fitness]])
+    results[index] = [float(v).hex() for v in values]
+print(json.dumps(results, sort_keys=True))
+"""
+
+
+@pytest.fixture(scope='module')
+def task():
+    return load_task(TASKS / 'task5.yaml').replace(num_world_states=3)
+
+
+def genomes(task, count=4, seed=7):
+    """Return seeded genomes around the mean, as CMA-ES draws them."""
+    spec = genome_spec(task)
+    generator = np.random.default_rng(seed)
+    return [spec.initial_mean() + 0.1 * generator.standard_normal(spec.size)
+            for _ in range(count)]
+
+
+def exact(result):
+    values = np.concatenate([result.objectives, result.world_objectives.ravel(),
+                             result.final_errors.ravel(), [result.fitness]])
+    return [float(v).hex() for v in values]
+
+
+def test_evaluation_has_the_contract_fields(task):
+    x = genomes(task)[0]
+    result = evaluate(x, task)
+    assert isinstance(result, Evaluation)
+    names = objective_names(task)
+    assert result.objective_names == tuple(names) == ('position_1',)
+    assert result.objectives.shape == (1,)
+    assert result.world_objectives.shape == (3, 1)
+    assert result.initial_errors.shape == result.final_errors.shape == (3, 2)
+    assert result.fitness == pytest.approx(float(result.objectives @ task.objective_weights))
+    assert not result.collision and result.unstable_worlds == 0
+    assert result.simulated_time == pytest.approx(3 * 1.5)
+    # eq. (5): the mean over the worlds plus the torque penalty
+    penalty = result.objectives[0] - result.world_objectives.mean()
+    torque = np.abs(genome_spec(task).decode(x).controller.values).max()
+    spec = task.torque_penalty
+    expected = spec.weight * (torque - spec.threshold) if torque > spec.threshold else 0.0
+    assert penalty == pytest.approx(expected, abs=1e-12)
+    # the only goal is the last goal: its error at the end is the world's objective
+    np.testing.assert_array_equal(result.final_errors[:, 0], result.world_objectives[:, 0])
+
+
+def test_bit_identical_in_other_processes_and_orders(task):
+    candidates = genomes(task)
+    assert not any(evaluate(x, task).collision for x in candidates)  # all of them simulated
+    here = {str(index): exact(evaluate(x, task)) for index, x in enumerate(candidates)}
+    payload = json.dumps([x.tolist() for x in candidates])
+    for order in ([3, 2, 1, 0], [1, 3, 0, 2]):
+        output = subprocess.run(
+            [sys.executable, '-c', SCRIPT, str(TASKS), payload, json.dumps(order)],
+            check=True, capture_output=True, text=True, timeout=120, cwd=ROOT).stdout
+        assert json.loads(output.strip().splitlines()[-1]) == here
+    # and in this process after other evaluations, in another order
+    for index in (2, 0):
+        assert exact(evaluate(candidates[index], task)) == here[str(index)]
+
+
+def test_each_world_is_independent_of_the_others(task):
+    x = genomes(task)[1]
+    full = evaluate(x, task)
+    worlds = world_states(task)
+    for index in (2, 0):
+        alone = evaluate(x, task, worlds=[worlds[index]])
+        np.testing.assert_array_equal(alone.world_objectives[0], full.world_objectives[index])
+        np.testing.assert_array_equal(alone.final_errors[0], full.final_errors[index])
+
+
+@pytest.mark.parametrize('name', PRESETS)
+def test_every_preset_evaluates_a_candidate(name):
+    task = load_task(TASKS / name).replace(num_world_states=2)
+    spec = genome_spec(task)
+    result = evaluate(spec.initial_mean(), task)
+    assert result.objective_names == tuple(objective_names(task))
+    assert result.objectives.shape == (len(result.objective_names),)
+    assert np.isfinite(result.objectives).all() and np.isfinite(result.fitness)
+    assert np.isfinite(result.final_errors).all()
+    assert result.world_objectives.shape == (2, len(result.objective_names))
