@@ -3,11 +3,12 @@
 import dataclasses
 import pathlib
 
+from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.hierarchy import (
-    all_structures, bottom_up_path, HierarchyError, HierarchySearch, run_hierarchy,
-    transitions)
+    all_structures, bottom_up_path, evaluate_candidates, HierarchyError, HierarchySearch,
+    run_hierarchy, transitions)
 from hand_codesign.core.optimizers import replay, TellError
-from hand_codesign.core.task import parse_task
+from hand_codesign.core.task import load_task, parse_task
 import numpy as np
 import pytest
 
@@ -144,3 +145,31 @@ def test_check_tell_refuses_other_ids():
         search.tell({check.candidate_id + 1: [0.0, 0.0]})
     with pytest.raises(TellError, match='needs 2 finite objective values'):
         search.tell({check.candidate_id: [0.0]})
+
+
+def test_task4_preset_runs_six_structures_up_to_two_fingers_of_three_joints():
+    task = load_task(ROOT / 'config' / 'tasks' / 'task4.yaml')
+    search = HierarchySearch(task)
+    assert search.path == [(1,), (2,), (1, 1), (1, 2), (2, 2), (2, 3)]
+    assert search.structure_task.structure == (1,)
+
+
+def test_stop_rule_on_real_evaluations_of_task4():
+    task = load_task(ROOT / 'config' / 'tasks' / 'task4.yaml')
+    loose = dataclasses.replace(task.hierarchy, evaluation_world_states=3,
+                                position_threshold=0.05, orientation_threshold=1.0)
+    task = task.replace(iterations=2, population=4, num_world_states=2, hierarchy=loose)
+    for orientation_threshold, expected_stop in ((1.0, {'goals_met': (1,)}),
+                                                 (0.1, {'path_end': (2,)})):
+        task = task.replace(hierarchy=dataclasses.replace(
+            loose, orientation_threshold=orientation_threshold))
+        search = run_hierarchy(task, evaluate_candidates,
+                               HierarchySearch(task, path=[(1,), (2,)]))
+        assert search.stop() == expected_stop
+        for outcome in search.outcomes:
+            check_task = task.replace(structure=outcome.structure, num_world_states=3)
+            evaluation = evaluate(outcome.result.x, check_task)
+            assert np.array_equal(outcome.check_objectives, evaluation.objectives)
+            within = (evaluation.objectives[0] <= 0.05 and
+                      evaluation.objectives[1] <= orientation_threshold)
+            assert outcome.goals_met == bool(within)

@@ -35,8 +35,10 @@ and within 3 fingers of 3 joints::
     (1,) -> (2,) -> (1, 1) -> (1, 2) -> (1, 1, 1) -> (1, 1, 2) -> (1, 2, 2) -> (2, 2, 2)
          -> (2, 2, 3) -> (2, 3, 3) -> (3, 3, 3)
 
-The task's `hierarchy.stop_structure` ends the path (and, unless max_fingers / max_joints are
-given, bounds it: at most as many fingers and joints per finger as the stop structure has).
+The task's `hierarchy.stop_structure` ends the path and bounds it: at most as many fingers, and
+joints per finger, as the stop structure has (and as max_fingers / max_joints allow). Task 4
+("stops when reaching a two-fingered hand with three joints", stop structure (2, 3)) thus runs
+the first path above, six structures.
 
 `HierarchySearch` runs one optimization per structure on that path and, after each, evaluates
 the structure's best design on the task's evaluation world states; it stops as soon as every
@@ -143,16 +145,17 @@ def bottom_up_path(start=(1,), stop=None, max_fingers=None, max_joints=None):
     """
     Return the bottom-up sequence of structures from `start` (see the module docstring).
 
-    Without max_fingers / max_joints the limits are those of `stop`, or 3 and 3. The path ends
-    at `stop` or where no neighbour grows the hand. Raise HierarchyError when `stop` is not on
-    the path.
+    The path stays within max_fingers fingers of max_joints joints (default 3 and 3) and, with
+    a `stop` structure, within its number of fingers and its longest finger, so that it ends
+    there. Without `stop` it ends where no neighbour grows the hand. Raise HierarchyError when
+    `stop` is not on the path.
     """
     start = normalize_structure(start)
     stop = None if stop is None else normalize_structure(stop)
-    if max_fingers is None:
-        max_fingers = len(stop) if stop is not None else MAX_FINGERS
-    if max_joints is None:
-        max_joints = max(stop) if stop is not None else MAX_JOINTS
+    max_fingers = MAX_FINGERS if max_fingers is None else max_fingers
+    max_joints = MAX_JOINTS if max_joints is None else max_joints
+    if stop is not None:
+        max_fingers, max_joints = min(max_fingers, len(stop)), min(max_joints, max(stop))
     if len(start) > max_fingers or max(start) > max_joints:
         raise HierarchyError(f'start structure {list(start)} exceeds {max_fingers} fingers of '
                              f'{max_joints} joints')
