@@ -155,3 +155,21 @@ def test_event_plan_merges_checks_watches_and_frames(task):
     assert [bool(kind & 4) for kind in plan.kinds[:-1]].count(True) == 1  # joints at 1 s
     framed = EventPlan(schedule, task.time_step, frame_every=30, num_steps=300)
     assert 30 in framed.steps and 20 in framed.steps and 300 in framed.steps
+
+
+def test_a_rendering_simulator_shows_hand_and_object_in_its_frames(task, design):
+    seen = []
+
+    def on_frame(step, simulator):
+        client = simulator.client
+        view = client.computeViewMatrix((0.3, -0.3, 0.25), (0.0, 0.0, 0.07), (0.0, 0.0, 1.0))
+        projection = client.computeProjectionMatrixFOV(45.0, 1.0, 0.01, 5.0)
+        segmentation = client.getCameraImage(64, 64, view, projection)[4]
+        bodies = {-1, simulator.ground, simulator.hand, simulator.object_body}  # -1: sky
+        seen.append(set(np.unique(segmentation)) == bodies)
+
+    with Simulator(rendering=True) as simulator:
+        rendered = evaluate_design(design, task, simulator=simulator, on_frame=on_frame,
+                                   frame_every=150, worlds=world_states(task)[:1])
+    assert seen == [True] * 3
+    assert _same(rendered, evaluate_design(design, task, worlds=world_states(task)[:1]))

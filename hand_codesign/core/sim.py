@@ -27,8 +27,10 @@ rollout ends at the last goal (nothing after it is scored) or, with a frame call
 task's duration.
 
 Unstable simulation: a non-finite or exploding state (object farther than EXPLOSION_DISTANCE
-from its start, a joint faster than EXPLOSION_JOINT_SPEED) ends the rollout with
-`Rollout.unstable` set; evaluate() charges every objective of that world UNSTABLE_PENALTY.
+from its start, a non-finite joint or one faster than EXPLOSION_JOINT_SPEED) ends the rollout
+with `Rollout.unstable` set; evaluate() charges every objective of that world UNSTABLE_PENALTY.
+(Bullet itself caps joint speeds at 100 rad/s, btMultiBody's maximum coordinate velocity, so
+huge torques fling a finger but do not blow the joints up.)
 
 Start collisions: `start_collisions(objects)` reports whether the hand touches itself
 (non-adjacent links, after performCollisionDetection), the ground or the object of any world
