@@ -1,0 +1,332 @@
+"""
+What the analysis verbs need from a run's bag: its task, its evaluations and its designs.
+
+`open_run(path)` reads a bag with `bag.read_run`, turning a BagError into the CLI's UserError
+and printing the reader's warnings (a truncated bag is read up to the cut). The other functions
+work on the RunRecord it returns:
+
+- `run_task_of(record, structure, world_states)`: the Task of the run (as every process of the
+  run rebuilt it, `core.runs.run_task`), for one structure of a hierarchy if asked;
+- `evaluation_rows(record)`: every Evaluation joined with its Candidate (genome, structure),
+  with a status of 'ok', 'rejected' or 'duplicate' (a later answer for an already evaluated
+  candidate, which the optimizer ignored);
+- `recorded_design(record, candidate_id)`: one recorded candidate with its recorded result;
+- `best_candidate_id(record)` and `ranked_candidate_id(record, generation, rank)`: which design
+  a verb works on by default and on request.
+"""
+
+import dataclasses
+import sys
+
+from hand_codesign.analysis.bag import BagError
+from hand_codesign.analysis.bag import read_run
+from hand_codesign.cli import UserError
+from hand_codesign.core.runs import run_task
+from hand_codesign.core.task import TaskError
+import numpy as np
+
+STATUS_OK = 0
+STATUS_NAMES = {0: 'ok', 1: 'rejected'}
+
+
+def open_run(path, warn=True):
+    """Return the RunRecord of the bag at path; raise UserError for an unreadable bag."""
+    try:
+        record = read_run(path)
+    except BagError as error:
+        raise UserError(str(error)) from None
+    if warn:
+        for warning in record.warnings:
+            print(f'warning: {warning}', file=sys.stderr)
+    return record
+
+
+def require_run_info(record, purpose):
+    """Return the record's RunInfo, or raise UserError saying why `purpose` needs it."""
+    if record.run_info is None:
+        raise UserError(f'{record.path}: the bag holds no RunInfo message of run '
+                        f'{record.run_id!r}, so its task and seed are unknown; {purpose} '
+                        'needs them')
+    return record.run_info
+
+
+def run_task_of(record, structure=None, world_states=None):
+    """Return the Task of the run (for `structure` and `world_states` when given)."""
+    info = require_run_info(record, 'rebuilding the task')
+    try:
+        return run_task(info.task_yaml, f'{record.path} (RunInfo.task_yaml)', info.seed,
+                        info.iterations, info.population, world_states or info.world_states,
+                        structure)
+    except (TaskError, ValueError) as error:
+        raise UserError(f'{record.path}: the task recorded in the bag cannot be rebuilt: '
+                        f'{error}') from None
+
+
+def objective_names_of(record):
+    """Return the run's objective names (RunInfo, else the first evaluation's)."""
+    if record.run_info is not None and record.run_info.objective_names:
+        return list(record.run_info.objective_names)
+    evaluations = record.evaluations
+    if len(evaluations) and 'objective_names' in evaluations:
+        for names in evaluations['objective_names']:
+            if names:
+                return list(names)
+    summaries = record.generation_summaries
+    if len(summaries) and 'objective_names' in summaries:
+        return list(summaries['objective_names'][0])
+    return []
+
+
+def _first_index(ids):
+    """Return {id: index of its first occurrence} as (sorted unique ids, first indices)."""
+    unique, first = np.unique(np.asarray(ids, dtype=np.uint64), return_index=True)
+    return unique, first
+
+
+def _lookup(unique, first, ids):
+    """Return the first-occurrence row of each id in ids, -1 where it is unknown."""
+    ids = np.asarray(ids, dtype=np.uint64)
+    if not len(unique):
+        return np.full(len(ids), -1, dtype=np.int64)
+    position = np.searchsorted(unique, ids)
+    position = np.minimum(position, len(unique) - 1)
+    found = unique[position] == ids
+    return np.where(found, first[position], -1).astype(np.int64)
+
+
+def _row_matrix(column, rows, width):
+    """Return rows of a numeric list column as a (len(rows), width) float array, NaN-padded."""
+    out = np.full((len(rows), width), np.nan)
+    if not len(rows) or width == 0:
+        return out
+    if isinstance(column, np.ndarray) and column.dtype != object and column.ndim == 2:
+        valid = rows >= 0
+        values = column[rows[valid]]
+        out[valid, :values.shape[1]] = values[:, :width]
+        return out
+    for index, row in enumerate(rows):
+        if row >= 0:
+            value = np.asarray(column[row], dtype=float)
+            count = min(len(value), width)
+            out[index, :count] = value[:count]
+    return out
+
+
+@dataclasses.dataclass
+class EvaluationRows:
+    """Every Evaluation message of a run, in recorded order, with its candidate's genome."""
+
+    objective_names: list
+    generation: np.ndarray
+    candidate_id: np.ndarray
+    evaluator_id: np.ndarray     # object array of str
+    status: np.ndarray           # object array: 'ok', 'rejected' or 'duplicate'
+    reason: np.ndarray           # object array of str
+    objectives: np.ndarray       # (rows, objectives), NaN for rejections
+    fitness: np.ndarray
+    collision: np.ndarray
+    unstable_worlds: np.ndarray
+    simulated_time: np.ndarray
+    wall_time: np.ndarray
+    log_time: np.ndarray         # ns, when the recorder received it
+    candidate_row: np.ndarray    # row of the candidates table, -1 when not recorded
+    gene_names: list             # union of the gene names of every structure, first seen first
+    genes: np.ndarray            # (rows, len(gene_names)), NaN where a gene does not apply
+
+    def __len__(self):
+        """Return the number of evaluations."""
+        return len(self.candidate_id)
+
+    @property
+    def ok(self):
+        """Return the mask of the evaluations the optimizer used."""
+        return self.status == 'ok'
+
+
+def _statuses(evaluations):
+    """Return the status names; a later OK answer for an answered candidate is a duplicate."""
+    status_codes = np.asarray(evaluations['status'], dtype=np.int64)
+    names = np.array([STATUS_NAMES.get(int(code), f'status {int(code)}')
+                      for code in range(status_codes.max(initial=0) + 1)], dtype=object)
+    statuses = names[status_codes] if len(status_codes) else np.array([], dtype=object)
+    ok_rows = np.flatnonzero(status_codes == STATUS_OK)
+    ids = np.asarray(evaluations['candidate_id'], dtype=np.uint64)[ok_rows]
+    _, first = np.unique(ids, return_index=True)
+    repeated = np.ones(len(ok_rows), dtype=bool)
+    repeated[first] = False
+    statuses[ok_rows[repeated]] = 'duplicate'
+    return statuses
+
+
+def _genes(candidates, rows):
+    """Return (gene names, (len(rows), genes) physical-free genome matrix) of candidate rows."""
+    if not len(candidates) or 'genome' not in candidates:
+        return [], np.full((len(rows), 0), np.nan)
+    name_column = candidates['genome_names']
+    genome_column = candidates['genome']
+    valid = rows >= 0
+    groups = {}
+    for index in np.flatnonzero(valid):
+        groups.setdefault(name_column[rows[index]], []).append(index)
+    gene_names = list(dict.fromkeys(name for names in groups for name in names))
+    position = {name: index for index, name in enumerate(gene_names)}
+    genes = np.full((len(rows), len(gene_names)), np.nan)
+    for names, members in groups.items():
+        members = np.array(members)
+        columns = np.array([position[name] for name in names], dtype=np.int64)
+        values = _row_matrix(genome_column, rows[members], len(names))
+        genes[members[:, None], columns[None, :]] = values
+    return gene_names, genes
+
+
+def evaluation_rows(record):
+    """Return the EvaluationRows of a RunRecord."""
+    evaluations = record.evaluations
+    names = objective_names_of(record)
+    count = len(evaluations)
+    if not count:
+        empty = np.array([], dtype=float)
+        return EvaluationRows(names, empty, empty, empty, empty, empty,
+                              np.full((0, len(names)), np.nan), empty, empty, empty, empty,
+                              empty, empty, np.array([], dtype=np.int64), [],
+                              np.full((0, 0), np.nan))
+    unique, first = _first_index(record.candidates['candidate_id']) if len(
+        record.candidates) else (np.array([], dtype=np.uint64), np.array([], dtype=np.int64))
+    candidate_row = _lookup(unique, first, evaluations['candidate_id'])
+    gene_names, genes = _genes(record.candidates, candidate_row)
+    return EvaluationRows(
+        objective_names=names,
+        generation=np.asarray(evaluations['generation'], dtype=np.int64),
+        candidate_id=np.asarray(evaluations['candidate_id'], dtype=np.uint64),
+        evaluator_id=np.asarray(evaluations['evaluator_id'], dtype=object),
+        status=_statuses(evaluations),
+        reason=np.asarray(evaluations['reason'], dtype=object),
+        objectives=_row_matrix(evaluations['objectives'], np.arange(count), len(names)),
+        fitness=np.asarray(evaluations['fitness'], dtype=float),
+        collision=np.asarray(evaluations['collision'], dtype=bool),
+        unstable_worlds=np.asarray(evaluations['unstable_worlds'], dtype=np.int64),
+        simulated_time=np.asarray(evaluations['simulated_time'], dtype=float),
+        wall_time=np.asarray(evaluations['wall_time'], dtype=float),
+        log_time=np.asarray(evaluations['log_time'], dtype=np.int64),
+        candidate_row=candidate_row,
+        gene_names=gene_names,
+        genes=genes,
+    )
+
+
+@dataclasses.dataclass
+class RecordedDesign:
+    """One recorded candidate: its genome and the result the run recorded for it."""
+
+    candidate_id: int
+    generation: int
+    structure: tuple
+    world_states: int            # 0: the run's number of world states
+    x: np.ndarray                # normalized genome, as sent to the evaluator
+    genome_names: tuple
+    objective_names: list
+    objectives: np.ndarray       # None when the bag holds no OK evaluation of it
+    fitness: float
+    world_objectives: np.ndarray  # (worlds, objectives), or None
+    evaluator_id: str
+
+
+def recorded_design(record, candidate_id):
+    """Return the RecordedDesign of candidate_id, or raise UserError when it is not recorded."""
+    candidates = record.candidates
+    ids = np.asarray(candidates['candidate_id'], dtype=np.uint64) if len(candidates) else []
+    rows = np.flatnonzero(np.asarray(ids) == np.uint64(candidate_id))
+    if not len(rows):
+        raise UserError(f'{record.path}: candidate {candidate_id} is not in the bag (no '
+                        'Candidate message with its genome)')
+    candidate = candidates.row(int(rows[0]))
+    names = objective_names_of(record)
+    objectives = fitness = world_objectives = None
+    evaluator_id = ''
+    evaluations = record.evaluations
+    if len(evaluations):
+        matches = np.flatnonzero(
+            (np.asarray(evaluations['candidate_id'], dtype=np.uint64) == np.uint64(candidate_id))
+            & (np.asarray(evaluations['status']) == STATUS_OK))
+        if len(matches):
+            evaluation = evaluations.row(int(matches[0]))
+            objectives = np.asarray(evaluation['objectives'], dtype=float)
+            fitness = float(evaluation['fitness'])
+            world = np.asarray(evaluation['world_objectives'], dtype=float)
+            world_objectives = world.reshape(-1, len(objectives)) if len(objectives) else None
+            evaluator_id = str(evaluation['evaluator_id'])
+    return RecordedDesign(
+        candidate_id=int(candidate_id), generation=int(candidate['generation']),
+        structure=tuple(int(joints) for joints in candidate['structure']),
+        world_states=int(candidate.get('world_states', 0) or 0),
+        x=np.asarray(candidate['genome'], dtype=float),
+        genome_names=tuple(candidate['genome_names']), objective_names=names,
+        objectives=objectives, fitness=fitness, world_objectives=world_objectives,
+        evaluator_id=evaluator_id)
+
+
+def design_task(record, design):
+    """Return the Task with which a RecordedDesign was evaluated."""
+    return run_task_of(record, design.structure or None, design.world_states or None)
+
+
+def last_summary(record):
+    """Return the last GenerationSummary row (a dict), or None."""
+    summaries = record.generation_summaries
+    if not len(summaries):
+        return None
+    return summaries.row(len(summaries) - 1)
+
+
+def best_candidate_id(record):
+    """
+    Return the id of the run's best design.
+
+    That is the optimizer's own choice in its last GenerationSummary (the lowest weighted sum
+    for CMA-ES, the front's point closest to zero for MO-CMA-ES); without summaries (a bag cut
+    early) the OK evaluation of lowest fitness.
+    """
+    summary = last_summary(record)
+    if summary is not None:
+        return int(summary['best_candidate_id'])
+    rows = evaluation_rows(record)
+    ok = np.flatnonzero(rows.ok)
+    if not len(ok):
+        raise UserError(f'{record.path}: the bag holds no successful evaluation, so there is '
+                        'no best design')
+    return int(rows.candidate_id[ok[np.argmin(rows.fitness[ok])]])
+
+
+def ranked_candidate_id(record, generation=None, rank=0):
+    """Return the id of the rank-th best (lowest fitness) OK evaluation, of one generation."""
+    rows = evaluation_rows(record)
+    mask = rows.ok.copy()
+    where = 'the run'
+    if generation is not None:
+        mask &= rows.generation == generation
+        where = f'generation {generation}'
+    chosen = np.flatnonzero(mask)
+    if not len(chosen):
+        generations = sorted(set(rows.generation[rows.ok].tolist()))
+        span = f'{generations[0]}..{generations[-1]}' if generations else 'none'
+        raise UserError(f'{record.path}: no successful evaluation in {where} (generations '
+                        f'in the bag: {span})')
+    order = chosen[np.lexsort((rows.candidate_id[chosen], rows.fitness[chosen]))]
+    if not 0 <= rank < len(order):
+        raise UserError(f'--rank {rank}: {where} has {len(order)} evaluated designs; expected '
+                        f'a rank from 0 to {len(order) - 1}')
+    return int(rows.candidate_id[order[rank]])
+
+
+_UNITS = (('.length', 'm'), ('.position_x', 'm'), ('.position_z', 'm'),
+          ('_angle', 'rad'), ('_limit', 'rad'), ('controller.target.', 'rad'),
+          ('controller.torque.', 'N m'), ('controller.kp.', 'N m / rad'),
+          ('controller.kd.', 'N m s / rad'), ('friction', ''))
+
+
+def gene_unit(name):
+    """Return the physical unit of a gene, from its name ('' for a coefficient)."""
+    for marker, unit in _UNITS:
+        if marker in name:
+            return unit
+    return ''

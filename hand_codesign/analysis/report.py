@@ -1,0 +1,535 @@
+"""
+`hand-codesign analyze BAG [--out DIR]`: a report folder of a run, from its bag alone.
+
+Writes into DIR (default: `<bag>_report` next to the bag):
+
+- `evaluations.csv`: one row per Evaluation message, in recorded order: generation, candidate
+  id, evaluator, status (ok, rejected, or duplicate: a later answer the optimizer ignored),
+  every objective by name, fitness, collision, unstable worlds, simulated and wall time, the
+  rejection reason, and the candidate's normalized genome by gene name. Numbers are written
+  with Python's shortest exact repr, so they read back bit for bit; an empty cell is a value
+  the message does not have (objectives of a rejection, genes of another structure).
+- `generations.csv` and `convergence.png`: best and median of each objective per generation
+  (from the GenerationSummary messages, or from the evaluations when the bag has none) and the
+  best fitness so far.
+- `pareto.png` and `pareto_front.csv` for MO-CMA-ES runs: the Pareto front of every
+  generation, coloured by generation, and the final front.
+- `report.md`: task, seed, budget, wall time, evaluations per second, the figures, and the
+  best design with its parameters in physical units.
+
+It prints a summary table to the terminal.
+"""
+
+import pathlib
+import sys
+
+from hand_codesign.analysis import records
+from hand_codesign.cli import UserError
+from hand_codesign.core.genome import genome_spec
+import numpy as np
+
+MAX_TABLE_ROWS = 12
+
+
+def analyze_command(arguments):
+    """Write the report folder of a bag; return the exit code."""
+    record = records.open_run(arguments.bag)
+    out = pathlib.Path(arguments.out) if arguments.out else default_report_dir(record.path)
+    report = Report(record)
+    files = report.write(out)
+    print(report.summary_text())
+    print(f'report: {out} ({", ".join(sorted(path.name for path in files))})')
+    return 0
+
+
+def default_report_dir(bag_path):
+    """Return `<bag>_report` next to the bag (a folder, or an .mcap file without suffix)."""
+    path = pathlib.Path(bag_path).resolve()
+    stem = path.stem if path.is_file() else path.name
+    return path.parent / f'{stem}_report'
+
+
+def _number(value):
+    """Return the exact text of a float for CSV ('' for NaN)."""
+    return '' if value != value else repr(value)
+
+
+def _float_texts(column):
+    """Return the exact texts of a float column."""
+    return [_number(value) for value in np.asarray(column, dtype=float).tolist()]
+
+
+def _int_texts(column):
+    return [str(value) for value in np.asarray(column).tolist()]
+
+
+def _bool_texts(column):
+    return ['true' if value else 'false' for value in np.asarray(column, dtype=bool).tolist()]
+
+
+def _csv_text(value):
+    text = str(value)
+    if any(mark in text for mark in ',"\n\r'):
+        text = '"' + text.replace('"', '""') + '"'
+    return text
+
+
+def write_csv(path, header, columns):
+    """Write columns (lists of texts, equal lengths) under header as CSV."""
+    with open(path, 'w', encoding='utf-8', newline='') as stream:
+        stream.write(','.join(_csv_text(name) for name in header) + '\n')
+        stream.writelines(','.join(row) + '\n' for row in zip(*columns))
+
+
+def write_evaluations_csv(path, rows):
+    """Write EvaluationRows as the evaluations CSV."""
+    header = (['generation', 'candidate_id', 'evaluator', 'status']
+              + list(rows.objective_names)
+              + ['fitness', 'collision', 'unstable_worlds', 'simulated_time', 'wall_time',
+                 'reason'] + list(rows.gene_names))
+    columns = [_int_texts(rows.generation), _int_texts(rows.candidate_id),
+               [_csv_text(value) for value in rows.evaluator_id.tolist()],
+               list(rows.status)]
+    rejected = rows.status == 'rejected'
+    for index in range(len(rows.objective_names)):
+        columns.append(_float_texts(rows.objectives[:, index]))
+    fitness = np.where(rejected, np.nan, rows.fitness)
+    columns += [_float_texts(fitness), _bool_texts(rows.collision),
+                _int_texts(rows.unstable_worlds), _float_texts(rows.simulated_time),
+                _float_texts(rows.wall_time),
+                [_csv_text(value) for value in rows.reason.tolist()]]
+    for index in range(len(rows.gene_names)):
+        columns.append(_float_texts(rows.genes[:, index]))
+    write_csv(path, header, columns)
+
+
+class Generations:
+    """Per-generation statistics: structure, generation, best and median per objective."""
+
+    def __init__(self, structures, generations, best, median, best_fitness, evaluations,
+                 wall_time, source):
+        self.structures = structures        # list of tuples
+        self.generations = generations      # np.ndarray of int
+        self.best = best                    # (rows, objectives)
+        self.median = median
+        self.best_fitness = best_fitness    # best so far (NaN when unknown)
+        self.evaluations = evaluations      # told so far (NaN when unknown)
+        self.wall_time = wall_time
+        self.source = source                # 'summaries' or 'evaluations'
+
+    def __len__(self):
+        return len(self.generations)
+
+
+def _structure_tuples(column, count):
+    if count == 0:
+        return []
+    return [tuple(int(joints) for joints in column[index]) for index in range(count)]
+
+
+def generations_from_summaries(record, num_objectives):
+    """Return the Generations of the GenerationSummary messages (the final repeat dropped)."""
+    summaries = record.generation_summaries
+    structures = _structure_tuples(summaries['structure'], len(summaries))
+    generation = np.asarray(summaries['generation'], dtype=np.int64)
+    final = np.asarray(summaries['final'], dtype=bool)
+    keep = np.ones(len(summaries), dtype=bool)
+    for index in range(1, len(summaries)):
+        # the final summary repeats the last generation's statistics with final = true
+        if final[index] and generation[index] == generation[index - 1] and \
+                structures[index] == structures[index - 1]:
+            keep[index] = False
+    rows = np.flatnonzero(keep)
+    best = records._row_matrix(summaries['best'], rows, num_objectives)
+    median = records._row_matrix(summaries['median'], rows, num_objectives)
+    return Generations([structures[row] for row in rows], generation[rows], best, median,
+                       np.asarray(summaries['best_fitness'], dtype=float)[rows],
+                       np.asarray(summaries['evaluations'], dtype=float)[rows],
+                       np.asarray(summaries['wall_time'], dtype=float)[rows], 'summaries')
+
+
+def generations_from_evaluations(rows, weights):
+    """Return Generations computed from the OK evaluations (a bag without summaries)."""
+    ok = rows.ok
+    generations = np.unique(rows.generation[ok])
+    count = len(rows.objective_names)
+    best = np.full((len(generations), count), np.nan)
+    median = np.full((len(generations), count), np.nan)
+    best_fitness = np.full(len(generations), np.nan)
+    evaluations = np.full(len(generations), np.nan)
+    so_far, told = np.inf, 0
+    for index, generation in enumerate(generations):
+        mask = ok & (rows.generation == generation)
+        values = rows.objectives[mask]
+        best[index] = values.min(axis=0)
+        median[index] = np.median(values, axis=0)
+        fitness = values @ weights if weights is not None else rows.fitness[mask]
+        so_far = min(so_far, float(np.min(fitness)))
+        told += int(mask.sum())
+        best_fitness[index] = so_far
+        evaluations[index] = told
+    return Generations([()] * len(generations), generations, best, median, best_fitness,
+                       evaluations, np.full(len(generations), np.nan), 'evaluations')
+
+
+def pareto_fronts(record, num_objectives):
+    """Return [(index, generation, front (points, objectives))] of the summaries with a front."""
+    summaries = record.generation_summaries
+    fronts = []
+    if not len(summaries) or 'pareto_front' not in summaries:
+        return fronts
+    sizes = np.asarray(summaries['pareto_size'], dtype=np.int64)
+    for index in np.flatnonzero(sizes > 0):
+        values = np.asarray(summaries['pareto_front'][index], dtype=float)
+        values = values[np.isfinite(values)] if values.ndim == 1 else values
+        front = values.reshape(-1, num_objectives)
+        fronts.append((int(index), int(summaries['generation'][index]), front))
+    return fronts
+
+
+class Report:
+    """The report of one RunRecord: tables, figures and text."""
+
+    def __init__(self, record):
+        self.record = record
+        self.info = record.run_info
+        self.rows = records.evaluation_rows(record)
+        self.names = self.rows.objective_names
+        self.task = None
+        self.task_problem = ''
+        if self.info is not None:
+            try:
+                self.task = records.run_task_of(record)
+            except UserError as error:
+                self.task_problem = str(error)
+        weights = self.task.objective_weights if self.task is not None else None
+        if len(record.generation_summaries):
+            self.generations = generations_from_summaries(record, len(self.names))
+        else:
+            self.generations = generations_from_evaluations(self.rows, weights)
+        self.fronts = pareto_fronts(record, len(self.names)) if self.names else []
+        self.best = self._best_design()
+
+    # ---------------------------------------------------------------- facts
+
+    def _best_design(self):
+        if not self.rows.ok.any() and not len(self.record.generation_summaries):
+            return None
+        try:
+            design = records.recorded_design(self.record,
+                                             records.best_candidate_id(self.record))
+        except UserError as error:
+            self.task_problem = self.task_problem or str(error)
+            return None
+        if design.objectives is None:
+            summary = records.last_summary(self.record)
+            if summary is not None and int(summary['best_candidate_id']) == design.candidate_id:
+                design.objectives = np.asarray(summary['best_objectives'], dtype=float)
+                design.fitness = float(summary['best_fitness'])
+        return design
+
+    @property
+    def wall_time(self):
+        """Return the run's wall time in seconds (the optimizer's, else the bag's span)."""
+        summary = records.last_summary(self.record)
+        if summary is not None and summary['wall_time'] > 0:
+            return float(summary['wall_time'])
+        return (self.record.end_time - self.record.start_time) / 1e9
+
+    def facts(self):
+        """Return [(label, text)] describing the run."""
+        info, rows, record = self.info, self.rows, self.record
+        ok = int(rows.ok.sum())
+        facts = [('bag', record.path), ('run', record.run_id or '(unknown)')]
+        if info is not None:
+            facts += [('task', info.task_name), ('seed', str(info.seed)),
+                      ('algorithm', info.algorithm),
+                      ('budget', f'{info.iterations} generations x {info.population} '
+                                 f'candidates x {info.world_states} world states = '
+                                 f'{info.iterations * info.population} evaluations, '
+                                 f'{info.iterations * info.population * info.world_states} '
+                                 'rollouts')]
+            if self.task is not None and self.task.hierarchy is not None:
+                facts.append(('hierarchy', f'structures from {list(self.task.hierarchy.start)}'
+                                           ' (budget per structure)'))
+            elif self.task is not None:
+                facts.append(('structure', str(list(self.task.structure))))
+            if info.resumed_from:
+                facts.append(('resumed from', info.resumed_from))
+        else:
+            facts.append(('task', '(unknown: the bag holds no RunInfo)'))
+        wall = self.wall_time
+        facts += [
+            ('evaluations', f'{ok} ok, {int((rows.status == "rejected").sum())} rejected, '
+                            f'{int((rows.status == "duplicate").sum())} duplicate'),
+            ('generations', f'{len(self.generations)} (from {self.generations.source})'),
+            ('wall time', f'{wall:.1f} s'),
+            ('evaluations per second', f'{ok / wall:.2f}' if wall > 0 else 'n/a'),
+        ]
+        simulated = float(np.sum(rows.simulated_time[rows.ok]))
+        if wall > 0 and simulated > 0:
+            facts.append(('simulated time', f'{simulated:.1f} s ({simulated / wall:.1f} '
+                                            'simulated s per wall s)'))
+        evaluators = sorted(set(rows.evaluator_id[rows.ok].tolist()))
+        facts.append(('evaluators', f'{len(evaluators)}: {", ".join(evaluators[:8])}'
+                                    + (' ...' if len(evaluators) > 8 else '')))
+        summary = records.last_summary(record)
+        if summary is not None:
+            facts.append(('stopped', 'yes: ' + (summary['stop_reason'] or 'final')
+                          if summary['final'] else 'no final summary (run interrupted?)'))
+        if record.truncated:
+            facts.append(('bag', 'truncated: read up to the cut'))
+        return facts
+
+    def best_parameters(self):
+        """Return [(gene, physical value, unit, lower, upper, normalized)] of the best design."""
+        design = self.best
+        if design is None or self.info is None:
+            return []
+        try:
+            task = records.design_task(self.record, design)
+            spec = genome_spec(task)
+            values = spec.values(design.x)
+        except (UserError, ValueError) as error:
+            self.task_problem = self.task_problem or str(error)
+            return []
+        return [(name, value, records.gene_unit(name), lower, upper, x)
+                for name, value, lower, upper, x in zip(spec.names, values.values(),
+                                                        spec.lower, spec.upper, design.x)]
+
+    # ---------------------------------------------------------------- files
+
+    def write(self, out):
+        """Write every file of the report into folder out; return their paths."""
+        out = pathlib.Path(out)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise UserError(f'--out {out}: cannot create the folder: {error}') from None
+        files = [out / 'evaluations.csv', out / 'generations.csv']
+        write_evaluations_csv(files[0], self.rows)
+        self.write_generations_csv(files[1])
+        figures = []
+        if len(self.generations) and self.names:
+            figures.append(plot_convergence(out / 'convergence.png', self.generations,
+                                            self.names, self.record.run_id))
+        if self.fronts:
+            figures.append(plot_pareto(out / 'pareto.png', self.fronts, self.names))
+            files.append(out / 'pareto_front.csv')
+            self.write_front_csv(files[-1])
+        files += figures
+        files.append(out / 'report.md')
+        files[-1].write_text(self.markdown([figure.name for figure in figures]),
+                             encoding='utf-8')
+        return files
+
+    def write_generations_csv(self, path):
+        generations = self.generations
+        header = (['structure', 'generation']
+                  + [f'best_{name}' for name in self.names]
+                  + [f'median_{name}' for name in self.names]
+                  + ['best_fitness_so_far', 'evaluations', 'wall_time'])
+        columns = [['x'.join(str(j) for j in structure) for structure in generations.structures],
+                   _int_texts(generations.generations)]
+        columns += [_float_texts(generations.best[:, i]) for i in range(len(self.names))]
+        columns += [_float_texts(generations.median[:, i]) for i in range(len(self.names))]
+        columns += [_float_texts(generations.best_fitness),
+                    [_number(value) if value != value else str(int(value))
+                     for value in generations.evaluations.tolist()],
+                    _float_texts(generations.wall_time)]
+        write_csv(path, header, columns)
+
+    def write_front_csv(self, path):
+        index, generation, front = self.fronts[-1]
+        columns = [[str(generation)] * len(front)]
+        columns += [_float_texts(front[:, i]) for i in range(front.shape[1])]
+        write_csv(path, ['generation'] + list(self.names), columns)
+
+    # ---------------------------------------------------------------- text
+
+    def markdown(self, figure_names):
+        """Return report.md."""
+        lines = [f'# Run {self.record.run_id or "(unknown)"}', '', '| | |', '|---|---|']
+        lines += [f'| {label} | {_markdown_cell(text)} |' for label, text in self.facts()]
+        if self.record.warnings:
+            lines += ['', '## Warnings from reading the bag', '']
+            lines += [f'- {_markdown_cell(warning)}' for warning in self.record.warnings]
+        lines += ['', '## Convergence', '']
+        for name in figure_names:
+            lines += [f'![{name}]({name})', '']
+        lines += self.best_markdown()
+        lines += ['', '## Files', '',
+                  '- `evaluations.csv`: every evaluation (normalized genome by gene name)',
+                  '- `generations.csv`: best and median of each objective per generation']
+        if self.fronts:
+            lines.append('- `pareto_front.csv`: the final Pareto front')
+        if self.task is not None:
+            lines += ['', '## Task file as run', '', '```yaml', self.info.task_yaml.rstrip(),
+                      '```']
+        return '\n'.join(lines) + '\n'
+
+    def best_markdown(self):
+        design = self.best
+        lines = ['## Best design', '']
+        if design is None:
+            return lines + ['No design was evaluated successfully.']
+        lines.append(f'Candidate {design.candidate_id} of generation {design.generation}, '
+                     f'structure {list(design.structure)}, evaluated by '
+                     f'{design.evaluator_id or "(no evaluation in the bag)"}.')
+        if design.objectives is not None:
+            lines += ['', '| objective | value |', '|---|---|']
+            lines += [f'| {name} | {value:.6g} |'
+                      for name, value in zip(self.names, design.objectives)]
+            lines.append(f'| fitness (weighted sum) | {design.fitness:.6g} |')
+        parameters = self.best_parameters()
+        if parameters:
+            lines += ['', '| parameter | value | unit | lower | upper | normalized |',
+                      '|---|---|---|---|---|---|']
+            lines += [f'| {name} | {value:.6g} | {unit} | {lower:.6g} | {upper:.6g} | '
+                      f'{x:.4f} |' for name, value, unit, lower, upper, x in parameters]
+            lines += ['', 'Joint limit pairs are sorted and initial angles clipped into them '
+                          'when the design is built.']
+        elif self.task_problem:
+            lines += ['', f'Parameters in physical units unavailable: {self.task_problem}']
+        return lines
+
+    def summary_text(self):
+        """Return the terminal summary: facts, a table of generations, the best design."""
+        width = max(len(label) for label, _ in self.facts())
+        lines = [f'{label:<{width}}  {text}' for label, text in self.facts()]
+        lines += ['', self.generation_table()]
+        design = self.best
+        if design is not None:
+            objectives = ('' if design.objectives is None else ', '.join(
+                f'{name} {value:.4g}' for name, value in zip(self.names, design.objectives)))
+            fitness = '' if design.fitness is None else f'fitness {design.fitness:.4g}'
+            lines += ['', f'best design: candidate {design.candidate_id} (generation '
+                          f'{design.generation}), {fitness} ({objectives})']
+            for name, value, unit, *_ in self.best_parameters():
+                lines.append(f'  {name:<40} {value:>12.6g} {unit}')
+        return '\n'.join(lines)
+
+    def generation_table(self):
+        generations = self.generations
+        if not len(generations):
+            return '(no generation finished)'
+        count = len(generations)
+        shown = np.unique(np.linspace(0, count - 1, min(count, MAX_TABLE_ROWS)).astype(int))
+        names = self.names
+        header = ['gen'] + [f'best {n}' for n in names] + [f'median {n}' for n in names] + [
+            'best so far', 'evals']
+        table = [header]
+        for index in shown:
+            structure = generations.structures[index]
+            label = str(generations.generations[index])
+            if structure and len(set(generations.structures)) > 1:
+                label = 'x'.join(map(str, structure)) + ':' + label
+            evaluations = generations.evaluations[index]
+            table.append([label] + [f'{v:.4g}' for v in generations.best[index]]
+                         + [f'{v:.4g}' for v in generations.median[index]]
+                         + [f'{generations.best_fitness[index]:.4g}',
+                            '' if evaluations != evaluations else str(int(evaluations))])
+        widths = [max(len(row[column]) for row in table) for column in range(len(header))]
+        return '\n'.join('  '.join(cell.rjust(width) for cell, width in zip(row, widths))
+                         for row in table)
+
+
+def _markdown_cell(text):
+    return str(text).replace('|', '\\|').replace('\n', ' ')
+
+
+# -------------------------------------------------------------------- figures
+
+def _pyplot():
+    import matplotlib
+    matplotlib.use('Agg')
+    from matplotlib import pyplot
+    return pyplot
+
+
+def _scale(axes, values):
+    finite = values[np.isfinite(values)]
+    if len(finite) and finite.min() > 0 and finite.max() > 20 * finite.min():
+        axes.set_yscale('log')
+
+
+def plot_convergence(path, generations, names, title):
+    """Plot best and median of each objective per generation, and the best fitness so far."""
+    pyplot = _pyplot()
+    panels = len(names) + 1
+    columns = min(panels, 3)
+    rows = -(-panels // columns)
+    figure, axes = pyplot.subplots(rows, columns, figsize=(4.2 * columns, 3.2 * rows),
+                                   squeeze=False)
+    x = np.arange(len(generations))
+    changes = [index for index in range(1, len(generations))
+               if generations.structures[index] != generations.structures[index - 1]]
+    for index, name in enumerate(names + ['fitness (best so far)']):
+        ax = axes.flat[index]
+        if index < len(names):
+            ax.plot(x, generations.best[:, index], label='best', color='tab:blue')
+            ax.plot(x, generations.median[:, index], label='median', color='tab:orange')
+            _scale(ax, np.concatenate([generations.best[:, index],
+                                       generations.median[:, index]]))
+            ax.legend(fontsize='small')
+        else:
+            ax.plot(x, generations.best_fitness, color='tab:green')
+            _scale(ax, generations.best_fitness)
+        for change in changes:
+            ax.axvline(change - 0.5, color='grey', linestyle=':', linewidth=0.8)
+        ax.set_title(name, fontsize='medium')
+        ax.xaxis.get_major_locator().set_params(integer=True)
+        ax.set_xlabel('generation' + (' (all structures)' if changes else ''))
+        ax.grid(True, alpha=0.3)
+    for ax in list(axes.flat)[panels:]:
+        ax.axis('off')
+    figure.suptitle(f'convergence of {title}' if title else 'convergence', fontsize='medium')
+    figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    pyplot.close(figure)
+    return pathlib.Path(path)
+
+
+def plot_pareto(path, fronts, names):
+    """Plot the Pareto front of every generation (colour = generation) for objective pairs."""
+    pyplot = _pyplot()
+    pairs = [(i, j) for i in range(len(names)) for j in range(i + 1, len(names))][:6]
+    if not pairs:
+        pairs = [(0, 0)]
+    columns = min(len(pairs), 3)
+    rows = -(-len(pairs) // columns)
+    figure, axes = pyplot.subplots(rows, columns, figsize=(4.6 * columns, 3.8 * rows),
+                                   squeeze=False)
+    colormap = pyplot.get_cmap('viridis')
+    count = len(fronts)
+    for ax, (i, j) in zip(axes.flat, pairs):
+        for order, (_, generation, front) in enumerate(fronts):
+            colour = colormap(order / max(count - 1, 1))
+            ax.scatter(front[:, i], front[:, j], s=8, color=colour, alpha=0.6)
+        last = fronts[-1][2]
+        ordered = last[np.argsort(last[:, i])]
+        ax.plot(ordered[:, i], ordered[:, j], 'o-', color='tab:red', markersize=3,
+                linewidth=1, label=f'final front (generation {fronts[-1][1]})')
+        ax.set_xlabel(names[i])
+        ax.set_ylabel(names[j])
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize='small')
+    for ax in list(axes.flat)[len(pairs):]:
+        ax.axis('off')
+    mappable = pyplot.cm.ScalarMappable(cmap=colormap)
+    mappable.set_clim(fronts[0][1], fronts[-1][1])
+    figure.colorbar(mappable, ax=list(axes.flat), label='generation')
+    figure.suptitle('Pareto front per generation', fontsize='medium')
+    figure.savefig(path, dpi=100)
+    pyplot.close(figure)
+    return pathlib.Path(path)
+
+
+def main(argv=None):
+    """Run `analyze` alone (python -m hand_codesign.analysis.report BAG [--out DIR])."""
+    from hand_codesign.cli import main as cli_main
+    return cli_main(['analyze'] + list(sys.argv[1:] if argv is None else argv))
+
+
+if __name__ == '__main__':
+    sys.exit(main())
