@@ -1,5 +1,6 @@
 """CMA-ES and MO-CMA-ES: optima of standard functions, determinism, save/restore, replay."""
 
+import dataclasses
 import os
 import pathlib
 import pickle
@@ -10,7 +11,7 @@ from deap import tools as deap_tools
 from hand_codesign.core import load_task, world_states
 from hand_codesign.core import optimizers
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.genome import genome_spec, seed_genome
 from hand_codesign.core.optimizers import (
     Candidate, closest_to_zero, CmaEs, least_hypervolume_contributor, make_optimizer, MoCmaEs,
     non_dominated, OptimizerError, replay, ReplayError, TellError)
@@ -307,3 +308,25 @@ def _individual(values):
     individual = optimizers._Individual(list(values))
     individual.fitness = optimizers._MinimizingFitness(tuple(values))
     return individual
+
+
+def test_seeded_search_of_task1_starts_at_the_seed_design():
+    task = load_task(ROOT / 'config' / 'tasks' / 'task1.yaml').replace(population=400)
+    spec = genome_spec(task)
+    seed_x = seed_genome(task)
+    optimizer = make_optimizer(task, spec.size)
+    assert np.array_equal(optimizer.x0, seed_x)
+    assert np.all((seed_x >= 0) & (seed_x <= 1))  # the seed lies inside its delta bounds
+    assert np.allclose(numbers(spec.decode(seed_x).hand), numbers(task.seed_design.hand),
+                       equal_nan=True)
+    points = np.array([c.x for c in optimizer.ask()])
+    assert np.allclose(points.mean(axis=0), seed_x, atol=0.03)
+
+
+def numbers(value):
+    """Return every number inside nested dataclasses and tuples, in order (None as NaN)."""
+    if dataclasses.is_dataclass(value):
+        return numbers(dataclasses.astuple(value))
+    if isinstance(value, (tuple, list)):
+        return [number for item in value for number in numbers(item)]
+    return [np.nan if value is None else float(value)]
