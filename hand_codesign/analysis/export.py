@@ -370,7 +370,7 @@ def load_export(folder):
         raise UserError(f'{path}: task: cannot rebuild the task: {error}') from None
     design = design_from_document(fields.get(document, 'design', ''), fields)
     if design.hand.structure != tuple(task.structure):
-        fields.fail('design.fingers', f'the task\'s structure {list(task.structure)}, got '
+        fields.fail('design.fingers', f'the structure of the task, {list(task.structure)}, got '
                                       f'{list(design.hand.structure)}')
     recorded = fields.mapping(document.get('recorded') or {}, 'recorded')
     objectives = recorded.get('objectives')
