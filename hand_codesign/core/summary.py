@@ -3,19 +3,23 @@
 import numpy as np
 
 
-def generation_summary(generation, structure, names, objectives, result, evaluations,
-                       wall_time, final=False, stop_reason=''):
+def generation_summary(generation, structure, names, told_ids, objectives, result,
+                       evaluations, wall_time, check=False):
     """
-    Return the summary of one told generation as a plain dict.
+    Return the summary of one told batch as a plain dict.
 
-    objectives: (population, num_objectives) values of this generation; result: the
-    optimizer's OptimizerResult after the tell (best so far, Pareto front for MO-CMA-ES).
+    told_ids, objectives: the candidates of the batch and their (batch, num_objectives)
+    values as told; result: the optimizer's OptimizerResult after the tell (best so far,
+    Pareto front for MO-CMA-ES); check: the batch was a hierarchy structure's check.
     """
     objectives = np.asarray(objectives, dtype=float).reshape(-1, len(names))
     front = getattr(result, 'pareto_objectives', np.zeros((0, len(names))))
     return {
         'generation': int(generation),
         'structure': tuple(int(joints) for joints in structure),
+        'check': bool(check),
+        'told_ids': [int(candidate_id) for candidate_id in told_ids],
+        'told_objectives': objectives,
         'names': tuple(names),
         'best': objectives.min(axis=0),
         'median': np.median(objectives, axis=0),
@@ -27,8 +31,8 @@ def generation_summary(generation, structure, names, objectives, result, evaluat
         'best_x': np.asarray(result.x, dtype=float),
         'evaluations': int(evaluations),
         'wall_time': float(wall_time),
-        'final': bool(final),
-        'stop_reason': stop_reason,
+        'final': False,
+        'stop_reason': '',
     }
 
 

@@ -51,12 +51,13 @@ def summary_message(run_id, summary):
     front = np.asarray(summary['pareto_front'], dtype=float).reshape(-1, len(summary['names']))
     return GenerationSummary(
         run_id=run_id, generation=int(summary['generation']),
-        structure=[int(joints) for joints in summary['structure']],
+        structure=[int(joints) for joints in summary['structure']], check=summary['check'],
         objective_names=list(summary['names']),
         best=float_list(summary['best']), median=float_list(summary['median']),
         worst=float_list(summary['worst']), pareto_size=int(front.shape[0]),
         pareto_front=float_list(front), best_candidate_id=int(summary['best_id']),
         best_objectives=float_list(summary['best_objectives']),
         best_fitness=float(summary['best_fitness']), best_genome=float_list(summary['best_x']),
+        told_ids=summary['told_ids'], told_objectives=float_list(summary['told_objectives']),
         evaluations=int(summary['evaluations']), wall_time=float(summary['wall_time']),
         final=bool(summary['final']), stop_reason=summary['stop_reason'])

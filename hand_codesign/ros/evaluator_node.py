@@ -47,10 +47,14 @@ class EvaluatorNode(Node):
             description='candidates it asks to have queued at once'))
         self.declare_parameter('heartbeat_period', 0.5, ParameterDescriptor(
             description='seconds between status messages'))
+        self.declare_parameter('subscribers_expected', 1, ParameterDescriptor(
+            description='subscriptions to its evaluations (optimizer, recorders) to wait for '
+                        'before it announces itself'))
         self.evaluator_id = (self.get_parameter('evaluator_id').value
                              or f'{socket.gethostname()}-{os.getpid()}')
         self.wanted_run = self.get_parameter('run_id').value
         self.capacity = self.get_parameter('capacity').value
+        self.subscribers_expected = self.get_parameter('subscribers_expected').value
 
         self.runs = {}  # run id -> RunInfo message
         self.tasks = {}  # (run id, structure) -> Task
@@ -130,7 +134,8 @@ class EvaluatorNode(Node):
                                            f'evaluation failed: {type(error).__name__}: {error}')
             answer.wall_time = time.perf_counter() - started
             if answer.simulated_time > 0:
-                task, _ = self.tasks.get((message.run_id, tuple(message.structure)), (None, None))
+                task, _ = self.tasks.get(
+                    (message.run_id, tuple(message.structure), message.world_states), (None, None))
                 steps = answer.simulated_time / task.time_step if task else 0.0
                 self.steps_per_second = steps / max(answer.wall_time, 1e-9)
             self.evaluations.publish(answer)
@@ -157,18 +162,24 @@ class EvaluatorNode(Node):
         run = self.runs.get(message.run_id)
         if run is None:
             raise CandidateRejected(f'no RunInfo received for run "{message.run_id}"')
-        key = (message.run_id, tuple(message.structure))
+        key = (message.run_id, tuple(message.structure), message.world_states)
         if key not in self.tasks:
             try:
                 task = run_task(
                     run.task_yaml, f'run {run.run_id} task', run.seed, run.iterations,
-                    run.population, run.world_states, tuple(message.structure) or None)
+                    run.population, message.world_states or run.world_states,
+                    tuple(message.structure) or None)
                 self.tasks[key] = (task, genome_spec(task))
             except ValueError as error:
                 raise CandidateRejected(f'unusable structure or task: {error}')
         return self.tasks[key]
 
     def publish_status(self):
+        # Announcing itself only once every expected subscriber (the optimizer and the
+        # recorder) has matched its evaluations makes sure the bag gets all of them, even
+        # those of an evaluator killed right after its first answer.
+        if self.evaluations.get_subscription_count() < self.subscribers_expected:
+            return
         with self.lock:
             load = self.busy
             done = self.done

@@ -15,9 +15,9 @@ import time
 from hand_codesign.core import genome_spec
 from hand_codesign.core.dispatch import Dispatcher
 from hand_codesign.core.dispatch import DispatchError
-from hand_codesign.core.optimizers import make_optimizer
 from hand_codesign.core.runs import library_versions
 from hand_codesign.core.runs import run_task
+from hand_codesign.core.search import Search
 from hand_codesign.core.summary import generation_summary
 from hand_codesign.core.summary import progress_line
 from hand_codesign.core.task import load_task
@@ -59,10 +59,11 @@ class OptimizerNode(Node):
             self.declare_parameter(name, default, ParameterDescriptor(description=description))
         self.finished = Future()
         self.task = self.load_run_task()
-        self.spec = genome_spec(self.task)
         self.run_id = (self.param('run_id')
                        or f'{self.task.name}-{time.strftime("%Y%m%d-%H%M%S")}-{os.getpid()}')
-        self.optimizer = make_optimizer(self.task, dim=self.spec.size)
+        self.search = Search(self.task)
+        self.batch = None
+        self.told = 0
         self.dispatcher = Dispatcher(self.param('heartbeat_timeout'),
                                      self.param('evaluation_timeout') or 3600.0)
         self.adaptive_timeout = self.param('evaluation_timeout') <= 0
@@ -146,64 +147,81 @@ class OptimizerNode(Node):
                 return
             self.started = time.monotonic()
             self.get_logger().info('evaluators ready, starting')
-        if not self.optimizer.pending:
-            if self.optimizer.stop():
+        if self.batch is None:
+            if self.search.stop():
                 self.finish()
                 return
-            self.results = {}
-            self.dispatcher.add(self.optimizer.ask())
+            self.start_batch()
         if self.adaptive_timeout and self.wall_times:
             self.dispatcher.evaluation_timeout = max(60.0, 20.0 * max(self.wall_times[-50:]))
         for candidate, evaluator_id, attempt in self.dispatcher.assignments(time.monotonic()):
-            self.publish(topics.CANDIDATES, candidate_message(
-                self.run_id, candidate, self.task.structure, self.spec.names, evaluator_id,
-                attempt))
+            message = candidate_message(self.run_id, candidate, candidate.structure,
+                                        self.batch_genome_names, evaluator_id, attempt)
+            if self.search.checking:
+                message.world_states = self.search.batch_task.num_world_states
+            self.publish(topics.CANDIDATES, message)
         if self.dispatcher.unfinished == 0:
-            self.tell_generation()
+            self.tell_batch()
 
-    def tell_generation(self):
-        candidates = self.optimizer.pending
-        self.optimizer.tell(self.results)
-        objectives = np.array([self.results[c.candidate_id] for c in candidates])
-        summary = self.summary(candidates[0].generation, objectives)
-        self.last_summary = summary
+    def start_batch(self):
+        self.batch = self.search.ask()
+        self.batch_genome_names = genome_spec(self.search.batch_task).names
+        self.results = {}
+        self.dispatcher.add(self.batch)
+
+    def tell_batch(self):
+        checking = self.search.checking
+        structure = self.search.batch_task.structure
+        optimizer = self.search.optimizer
+        self.search.tell(self.results)
+        self.told += len(self.batch)
+        told_ids = [candidate.candidate_id for candidate in self.batch]
+        objectives = np.array([self.results[candidate_id] for candidate_id in told_ids])
+        generation = self.batch[0].generation
+        self.batch = None
+        summary = generation_summary(
+            generation, structure, self.task.objective_names, told_ids, objectives,
+            optimizer.result, self.told, time.monotonic() - self.started, checking)
         self.publish(topics.GENERATION_SUMMARY, summary_message(self.run_id, summary))
+        if checking:
+            self.get_logger().info(
+                f'structure {list(structure)}: best design on the evaluation worlds: '
+                + ', '.join(f'{name} {value:.4g}'
+                            for name, value in zip(self.task.objective_names, objectives[0])))
+            return
+        self.last_summary = summary
         elapsed = time.monotonic() - self.started
-        done = self.optimizer.generation
+        done = optimizer.generation
         left = elapsed / done * (self.task.iterations - done)
         self.get_logger().info(progress_line(summary, self.task.iterations,
-                                             summary['evaluations'] / elapsed, left))
-
-    def summary(self, generation, objectives, final=False, stop_reason=''):
-        return generation_summary(
-            generation, self.task.structure, self.task.objective_names, objectives,
-            self.optimizer.result, self.optimizer.evaluations,
-            time.monotonic() - self.started, final, stop_reason)
+                                             self.told / elapsed, left))
 
     def finish(self):
-        stop_reason = ', '.join(f'{key}={value}' for key, value in self.optimizer.stop().items())
-        result = self.optimizer.result
-        summary = dict(self.last_summary, final=True, stop_reason=stop_reason,
+        stop_reason = ', '.join(f'{key}={value}' for key, value in self.search.stop().items())
+        result, structure = self.search.best
+        summary = dict(self.last_summary, final=True, stop_reason=stop_reason, told_ids=[],
+                       told_objectives=np.zeros((0, len(self.task.objective_names))),
                        wall_time=time.monotonic() - self.started)
         self.publish(topics.GENERATION_SUMMARY, summary_message(self.run_id, summary))
         for publisher in self.publishers_.values():
             publisher.wait_for_all_acked(Duration(seconds=5.0))
-        self.write_result(result, stop_reason)
+        self.write_result(result, structure, stop_reason)
         self.get_logger().info(f'run {self.run_id} finished ({stop_reason})')
         self.finished.set_result(True)
 
-    def write_result(self, result, stop_reason):
+    def write_result(self, result, structure, stop_reason):
         path = self.param('result_file')
         if not path:
             return
         with open(path, 'w', encoding='utf-8') as stream:
             json.dump({
                 'run_id': self.run_id, 'task': self.task.name, 'seed': self.task.seed,
-                'stop_reason': stop_reason, 'evaluations': self.optimizer.evaluations,
+                'stop_reason': stop_reason, 'evaluations': self.told,
+                'structure': list(structure),
                 'best_candidate_id': result.candidate_id, 'generation': result.generation,
                 'fitness': result.fitness,
                 'objectives': dict(zip(self.task.objective_names, result.objectives.tolist())),
-                'design': self.spec.values(result.x),
+                'design': genome_spec(self.task.replace(structure=structure)).values(result.x),
                 'published': self.published,
             }, stream, indent=2)
 

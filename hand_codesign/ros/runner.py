@@ -37,6 +37,9 @@ def run_command(arguments):
     bag = pathlib.Path(arguments.bag or default_bag_path(task.name)).resolve()
     if bag.exists():
         raise UserError(f'--bag {bag}: already exists; choose a new path')
+    if bag.suffix == '.mcap':
+        raise UserError(f'--bag {bag}: give a folder (the run writes its bag, result.json and '
+                        'logs there), not a .mcap file')
     with claimed_domain(arguments.domain_id) as domain_id:
         system = System(bag, domain_id, quiet=arguments.quiet)
         say = system.say
@@ -49,6 +52,8 @@ def run_command(arguments):
             system.stop_all()
             print(f'bag (interrupted run): {bag}')
             return 130
+        finally:
+            system.stop_all()
     if code != 0:
         print(f'bag: {bag}', file=sys.stderr)
         return code
@@ -147,7 +152,8 @@ class System:
         for index in range(arguments.evaluators):
             log = open(logs / f'evaluator-{index}.log', 'w')
             self.evaluators.append(self.node(
-                'evaluator_node', {'evaluator_id': f'evaluator-{index}'},
+                'evaluator_node', {'evaluator_id': f'evaluator-{index}',
+                                   'subscribers_expected': 2},
                 stdout=log, stderr=subprocess.STDOUT))
         self.optimizer = self.node('optimizer_node', {
             'task_file': pathlib.Path(arguments.task).resolve(),

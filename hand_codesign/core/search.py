@@ -1,0 +1,81 @@
+"""
+A run's whole search, driven one batch at a time: one optimization, or the hierarchy's chain.
+
+The optimizer node, resume and analysis see every task the same way through `Search`:
+`ask()` gives a batch of candidates, `batch_task` the task to evaluate them with (the
+structure and, for the check of a structure's best design, the hierarchy's evaluation world
+states), `tell()` takes id -> objectives, `stop()` says why it ended.
+"""
+
+import dataclasses
+
+from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.hierarchy import HierarchySearch
+from hand_codesign.core.optimizers import make_optimizer
+
+
+class Search:
+    """The search of a task: its optimizer, or a HierarchySearch when the task has one."""
+
+    def __init__(self, task, first_id=0):
+        self.task = task
+        if task.hierarchy is not None:
+            self._driver = HierarchySearch(task, first_id=first_id)
+        else:
+            self._driver = make_optimizer(task, genome_spec(task).size, first_id=first_id)
+        self._batch = None
+
+    @property
+    def hierarchical(self):
+        return isinstance(self._driver, HierarchySearch)
+
+    @property
+    def optimizer(self):
+        """Return the optimizer of the structure being searched."""
+        return self._driver.optimizer if self.hierarchical else self._driver
+
+    @property
+    def checking(self):
+        """Return True when the batch is the check of a structure's best design."""
+        return self.hierarchical and self._driver.checking
+
+    @property
+    def batch_task(self):
+        """Return the task with which the batch of `ask()` is evaluated."""
+        return self._driver.evaluation_task if self.hierarchical else self.task
+
+    def ask(self):
+        """Return the next batch, each candidate with its structure (the same until told)."""
+        if self._batch is None:
+            structure = self.batch_task.structure
+            self._batch = [dataclasses.replace(candidate, structure=structure)
+                           for candidate in self._driver.ask()]
+        return list(self._batch)
+
+    def tell(self, results):
+        """Tell the objectives (id -> vector) of the whole batch."""
+        self._driver.tell(results)
+        self._batch = None
+
+    def stop(self):
+        return self._driver.stop()
+
+    @property
+    def best(self):
+        """Return (OptimizerResult, structure) of the best design so far, or None."""
+        if self.hierarchical and self._driver.result is not None:
+            outcome = self._driver.result
+            return outcome.result, outcome.structure
+        result = self.optimizer.result
+        return None if result is None else (result, self.batch_task.structure)
+
+    def replay(self, recorded):
+        """Tell whole batches from recorded id -> objectives; return how many were told."""
+        told = 0
+        while not self.stop():
+            batch = self.ask()
+            if not all(candidate.candidate_id in recorded for candidate in batch):
+                break
+            self.tell({c.candidate_id: recorded[c.candidate_id] for c in batch})
+            told += 1
+        return told
