@@ -1,0 +1,8 @@
+"""Test session set-up shared by every test file."""
+
+import os
+import sys
+
+# The ROS 2 wheels do not set AMENT_PREFIX_PATH; `make test` does, a bare pytest may not.
+os.environ.setdefault('AMENT_PREFIX_PATH', sys.prefix)
+os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
