@@ -30,8 +30,8 @@ SUMMARY_FIELDS = ['generation', 'best', 'median', 'worst', 'pareto_front',
 DOMAINS = iter(range(150, 200))
 
 
-def start_run(bag, evaluators, extra=(), budget=BUDGET, domain=None):
-    command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
+def start_run(bag, evaluators, extra=(), budget=BUDGET, domain=None, task=TASK):
+    command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(task),
                '--evaluators', str(evaluators), '--bag', str(bag),
                '--domain-id', str(domain or next(DOMAINS)), *budget, *extra]
     return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
@@ -157,3 +157,17 @@ def test_foreign_and_malformed_messages_do_not_disturb_a_run(one_evaluator_run, 
     assert 'foreign-run' in record.run_ids
     rejected = record.evaluations.select(record.evaluations['status'] == 1)
     assert len(rejected) >= 1 and 'genome' in ' '.join(rejected['reason'])
+
+
+def test_hierarchy_task_searches_structures_bottom_up(tmp_path):
+    bag = tmp_path / 'hierarchy'
+    output = finish(start_run(bag, 2, budget=[
+        '--iterations', '1', '--popsize', '4', '--world-states', '2', '--seed', '3'],
+        task=ROOT / 'config' / 'tasks' / 'task4.yaml'))
+    summaries_table = read_run(bag).generation_summaries
+    checks = summaries_table.select(summaries_table['check'])
+    structures = [tuple(structure) for structure in checks['structure']]
+    assert structures[:3] == [(1,), (2,), (1, 1)]
+    assert 'structure [1]: best design on the evaluation worlds' in output
+    result = json.loads((bag / 'result.json').read_text())
+    assert tuple(result['structure']) in structures
