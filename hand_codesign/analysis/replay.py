@@ -40,6 +40,9 @@ GROUND_COLOUR = (0.8, 0.8, 0.8, 1.0)
 
 def replay_command(arguments):
     """Replay one design of a bag; return 0, or 1 when the objectives differ."""
+    if arguments.gui and not has_display():
+        raise UserError('--gui needs a display, and this session has none (DISPLAY is not '
+                        'set); render an animation instead with --gif FILE')
     record = records.open_run(arguments.bag)
     design = chosen_design(record, arguments.generation, arguments.rank)
     task = records.design_task(record, design)
@@ -229,9 +232,6 @@ def has_display():
 
 def show_gui(task, design, world):
     """Play one world in the PyBullet window in real time, until the window is closed."""
-    if not has_display():
-        raise UserError('--gui needs a display, and this session has none (DISPLAY is not '
-                        'set); render an animation instead with --gif FILE')
     import pybullet
     from pybullet_utils.bullet_client import BulletClient
     simulator = Simulator(rendering=True)

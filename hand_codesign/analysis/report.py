@@ -133,12 +133,16 @@ def generations_from_summaries(record, num_objectives):
     structures = _structure_tuples(summaries['structure'], len(summaries))
     generation = np.asarray(summaries['generation'], dtype=np.int64)
     final = np.asarray(summaries['final'], dtype=bool)
-    keep = np.ones(len(summaries), dtype=bool)
-    for index in range(1, len(summaries)):
+    # a hierarchy's check of a structure's best design is not a generation of the search
+    keep = (~np.asarray(summaries['check'], dtype=bool) if 'check' in summaries
+            else np.ones(len(summaries), dtype=bool))
+    previous = None
+    for index in np.flatnonzero(keep):
         # the final summary repeats the last generation's statistics with final = true
-        if final[index] and generation[index] == generation[index - 1] and \
-                structures[index] == structures[index - 1]:
+        if (final[index] and previous is not None and generation[index] == generation[previous]
+                and structures[index] == structures[previous]):
             keep[index] = False
+        previous = index
     rows = np.flatnonzero(keep)
     best = records._row_matrix(summaries['best'], rows, num_objectives)
     median = records._row_matrix(summaries['median'], rows, num_objectives)
@@ -271,14 +275,15 @@ class Report:
             facts.append(('simulated time', f'{simulated:.1f} s ({simulated / wall:.1f} '
                                             'simulated s per wall s)'))
         evaluators = sorted(set(rows.evaluator_id[rows.ok].tolist()))
-        facts.append(('evaluators', f'{len(evaluators)}: {", ".join(evaluators[:8])}'
-                                    + (' ...' if len(evaluators) > 8 else '')))
+        facts.append(('evaluators', str(len(evaluators)) + (
+            f': {", ".join(evaluators[:8])}' + (' ...' if len(evaluators) > 8 else '')
+            if evaluators else '')))
         summary = records.last_summary(record)
         if summary is not None:
             facts.append(('stopped', 'yes: ' + (summary['stop_reason'] or 'final')
                           if summary['final'] else 'no final summary (run interrupted?)'))
         if record.truncated:
-            facts.append(('bag', 'truncated: read up to the cut'))
+            facts.append(('bag state', 'truncated: read up to the cut'))
         return facts
 
     def best_parameters(self):
