@@ -7,8 +7,8 @@ DIR receives:
   friction), written by `core.hand.hand_urdf` from the same link table the simulator builds.
   Standard URDF has no capsule (PyBullet reads one, yourdfpy and urdfdom do not), so each
   capsule is written as what it is, a cylinder and a sphere at each end; the file loads in
-  PyBullet, yourdfpy and other URDF tools. URDF has no initial joint angles: they are in the
-  YAML.
+  PyBullet, yourdfpy and other URDF tools (in PyBullet pass URDF_USE_IMPLICIT_CYLINDER, or it
+  turns cylinders into meshes). URDF has no initial joint angles: they are in the YAML.
 - `controller.yaml`: everything to rebuild and re-simulate the design without the bag:
   `controller` (the policy as a person reads it: kind, timing, values per joint name,
   initial joint angles), `design` (hand and controller in physical units, in the format of a
