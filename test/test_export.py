@@ -2,8 +2,10 @@
 
 import math
 
+from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.export import load_export
 from hand_codesign.analysis.export import resimulate
+from hand_codesign.analysis.records import recorded_design
 from hand_codesign.cli import main
 from hand_codesign.cli import UserError
 from hand_codesign.core.genome import genome_spec
@@ -43,8 +45,8 @@ def test_export_writes_urdf_and_yaml(exported, real_run, capsys):
 def test_round_trip_gives_the_recorded_objectives(exported, real_run):
     export = load_export(exported)
     task = export.task
-    best_x = genome_spec(task).encode(real_run.result['design'])
-    assert export.design.hand == genome_spec(task).decode(best_x).hand
+    best = recorded_design(read_run(real_run.bag), real_run.result['best_candidate_id'])
+    assert export.design.hand == genome_spec(task).decode(best.x).hand
     recorded = np.array(list(real_run.result['objectives'].values()))
     assert np.array_equal(export.objectives, recorded)
     assert np.array_equal(resimulate(export).objectives, recorded)
