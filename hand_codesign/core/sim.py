@@ -29,8 +29,7 @@ step counter with the next event. Events: the goal schedule's checks (object pos
 early termination, eq. 6; every check also watches the object's stability), a stability
 watch twice per simulated second (the object; the joints once a second and at the end: each
 watch costs about 0.1 % of the rollout), and frames for replay when a callback is given. The
-rollout ends at the last goal (nothing after it is scored) or, with a frame callback, at the
-task's duration.
+rollout ends at the last goal: nothing after it is scored.
 
 Unstable simulation: a non-finite or exploding state (object farther than EXPLOSION_DISTANCE
 from its start, a non-finite joint or one faster than EXPLOSION_JOINT_SPEED) ends the rollout
@@ -106,9 +105,10 @@ class Client(BulletClient):
 class EventPlan:
     """The steps at which the rollout loop looks at the world, merged and flagged."""
 
-    def __init__(self, schedule, time_step, frame_every=0, num_steps=None):
-        last = schedule.check_step_list[-1] if schedule.num_checks else schedule.num_steps
-        self.num_steps = last if num_steps is None else num_steps
+    def __init__(self, schedule, time_step, frame_every=0):
+        # Nothing after the last goal is scored: the rollout ends there.
+        self.num_steps = (schedule.check_step_list[-1] if schedule.num_checks
+                          else schedule.num_steps)
         events = {}
         for step in schedule.check_step_list:
             events[step] = events.get(step, 0) | _RECORD
@@ -231,8 +231,7 @@ class Simulator:
         key = (schedule, frame_every)  # schedules compare by identity
         plan = self._plans.get(key)
         if plan is None:
-            num_steps = schedule.num_steps if frame_every else None
-            plan = EventPlan(schedule, schedule.time_step, frame_every, num_steps)
+            plan = EventPlan(schedule, schedule.time_step, frame_every)
             if len(self._plans) > 16:
                 self._plans.clear()
             self._plans[key] = plan
