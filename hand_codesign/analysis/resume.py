@@ -38,7 +38,10 @@ def told_objectives(record):
         return told
     count = len(records.objective_names_of(record))
     for index in range(len(summaries)):
-        ids = np.asarray(summaries['told_ids'][index], dtype=np.uint64).ravel()
+        ids = np.asarray(summaries['told_ids'][index]).ravel()
+        if ids.dtype.kind == 'f':   # the table pads the empty lists of some rows with NaN
+            ids = ids[np.isfinite(ids)]
+        ids = ids.astype(np.uint64)
         if not len(ids) or not count:
             continue
         values = np.asarray(summaries['told_objectives'][index], dtype=float).ravel()

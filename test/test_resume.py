@@ -1,0 +1,127 @@
+"""Resuming an interrupted run from its bag reaches the result of the uninterrupted run."""
+
+import json
+import signal
+import subprocess
+
+from analysis_run import BUDGET
+from analysis_run import CLI
+from analysis_run import copy_bag
+from analysis_run import decoded_messages
+from analysis_run import ROOT
+from analysis_run import run_cli
+from analysis_run import TASK
+from hand_codesign.analysis.bag import read_run
+from hand_codesign.analysis.resume import recorded_evaluations
+from hand_codesign.analysis.resume import resume_point
+from hand_codesign.cli import UserError
+from hand_codesign.core.evaluate import evaluate
+from hand_codesign.ros import topics
+import numpy as np
+import pytest
+
+
+def test_recorded_evaluations_are_what_the_optimizer_was_told(real_run):
+    recorded = recorded_evaluations(read_run(real_run.bag))
+    evaluations = decoded_messages(real_run.mcap, topics.EVALUATIONS)
+    assert sorted(recorded) == sorted({message.candidate_id for message in evaluations})
+    assert len(recorded) == 24
+    for message in evaluations:
+        assert np.array_equal(recorded[message.candidate_id], message.objectives)
+
+
+def interrupted_copy(real_run, path, generation=2, evaluations_kept=3):
+    """Return a copy of the bag ending after some evaluations of a generation."""
+    messages = decoded_messages(real_run.mcap, topics.EVALUATIONS)
+    of_generation = [m for m in messages if m.generation == generation]
+    cut_id = of_generation[evaluations_kept - 1].candidate_id
+    state = {'cut': False}
+
+    def keep(topic, log_time, message):
+        if state['cut']:
+            return False
+        if topic == topics.EVALUATIONS and message.candidate_id == cut_id:
+            state['cut'] = True
+        return True
+
+    return copy_bag(real_run.mcap, path, keep=keep), {m.candidate_id for m in of_generation[
+        :evaluations_kept]}
+
+
+def test_resume_from_an_interrupted_bag_reaches_the_uninterrupted_result(real_run, tmp_path):
+    bag, kept_ids = interrupted_copy(real_run, tmp_path / 'interrupted.mcap')
+    point = resume_point(bag)
+    assert point.batches_told == 2 and point.evaluations_told == 12
+    assert set(point.known) == kept_ids
+    assert len(point.to_evaluate) == 3
+    assert 'resuming run' in point.describe()
+    evaluated = []
+    search = point.search
+    while not search.stop():
+        results = {}
+        for candidate in search.ask():
+            if candidate.candidate_id in point.known:
+                results[candidate.candidate_id] = point.known[candidate.candidate_id]
+            else:
+                evaluated.append(candidate.candidate_id)
+                results[candidate.candidate_id] = evaluate(candidate.x,
+                                                           search.batch_task).objectives
+        search.tell(results)
+    assert len(evaluated) == 3 + 6      # the rest of generation 2, then generation 3
+    result, structure = search.best
+    expected = real_run.result
+    assert result.candidate_id == expected['best_candidate_id']
+    assert result.fitness == expected['fitness']
+    assert result.objectives.tolist() == list(expected['objectives'].values())
+    candidates = {c.candidate_id: c for c in decoded_messages(real_run.mcap, topics.CANDIDATES)}
+    assert np.array_equal(result.x, candidates[result.candidate_id].genome)
+
+
+def test_a_finished_run_is_not_resumed(real_run):
+    with pytest.raises(UserError, match=r'already finished \(maxiter=4\); nothing to resume'):
+        resume_point(real_run.bag)
+
+
+def test_a_bag_that_disagrees_with_its_seed_is_refused(real_run, tmp_path):
+    def other_seed(topic, message):
+        if topic == topics.RUN_INFO:
+            message.seed = 4
+            return True
+        return False
+
+    bag = copy_bag(real_run.mcap, tmp_path / 'seed4.mcap', edit=other_seed)
+    with pytest.raises(UserError, match='disagrees with a fresh search of its task and seed'):
+        resume_point(bag)
+
+
+def test_a_bag_without_run_info_cannot_be_resumed(real_run, tmp_path):
+    bag = copy_bag(real_run.mcap, tmp_path / 'statuses.mcap',
+                   keep=lambda topic, *_: topic == topics.EVALUATOR_STATUS)
+    with pytest.raises(UserError, match='holds no RunInfo'):
+        resume_point(bag)
+
+
+def test_run_resume_after_interrupting_a_run(real_run, tmp_path):
+    bag = tmp_path / 'interrupted'
+    process = subprocess.Popen(
+        CLI + ['run', '--task', str(TASK), '--evaluators', '2', '--bag', str(bag), *BUDGET],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        for line in process.stdout:
+            if 'generation 2/4' in line:
+                process.send_signal(signal.SIGINT)
+                break
+        process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert not (bag / 'result.json').exists()
+    resumed = tmp_path / 'resumed'
+    finished = run_cli('run', '--resume', bag, '--evaluators', '2', '--bag', resumed)
+    if finished.returncode == 2 and 'not available' in finished.stderr:
+        pytest.skip('run --resume is not wired into the run command yet')
+    assert finished.returncode == 0, finished.stdout + finished.stderr
+    result = json.loads((resumed / 'result.json').read_text())
+    for key in ('best_candidate_id', 'fitness', 'objectives', 'design'):
+        assert result[key] == real_run.result[key], key
