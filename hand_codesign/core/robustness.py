@@ -16,6 +16,7 @@ collision is evaluated again world by world, so that `collisions` names the very
 colliding world is not simulated: its final errors are its initial errors).
 """
 
+import concurrent.futures
 import csv
 import dataclasses
 import multiprocessing
@@ -99,9 +100,12 @@ def evaluate_robustness(x, task, worlds: Optional[Sequence] = None, values_per_q
     if processes == 1 or len(jobs) == 1:
         parts = [_evaluate_chunk(job) for job in jobs]
     else:
-        context = multiprocessing.get_context('spawn')
-        with context.Pool(min(processes, len(jobs))) as pool:
-            parts = pool.map(_evaluate_chunk, jobs, chunksize=1)
+        # A process pool executor fails (BrokenProcessPool) where a multiprocessing.Pool would
+        # wait forever for workers that cannot start.
+        spawn = multiprocessing.get_context('spawn')
+        with concurrent.futures.ProcessPoolExecutor(min(processes, len(jobs)),
+                                                    mp_context=spawn) as pool:
+            parts = list(pool.map(_evaluate_chunk, jobs))
     initial, final, collisions = (np.concatenate(column) for column in zip(*parts))
     return RobustnessReport(worlds, initial, final, collisions)
 
