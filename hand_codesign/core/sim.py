@@ -53,8 +53,8 @@ from pybullet_utils.bullet_client import BulletClient
 GRAVITY = -9.81  # m / s^2 along world z
 SOLVER_ITERATIONS = 50
 GROUND_FRICTION = 1.0
-GROUND_HALF_EXTENTS = (50.0, 50.0, 0.5)  # a box, top face at z = 0 (faster to build than
-# a GEOM_PLANE)
+# The ground is a box with its top face at z = 0: faster to build than a GEOM_PLANE.
+GROUND_HALF_EXTENTS = (50.0, 50.0, 0.5)
 COLLISION_TOLERANCE = 1e-6  # m of penetration that counts as a start collision
 EXPLOSION_DISTANCE = 100.0  # m from the object's start: the simulation has exploded
 EXPLOSION_JOINT_SPEED = 1e5  # rad / s
