@@ -330,3 +330,18 @@ def numbers(value):
     if isinstance(value, (tuple, list)):
         return [number for item in value for number in numbers(item)]
     return [np.nan if value is None else float(value)]
+
+
+def test_asking_stop_often_does_not_change_the_run():
+    def flat(x):
+        # Mostly flat (the best equals the 75th percentile): pycma stops on flat fitness.
+        return np.array([1.0 + (x[0] > 0.65)])
+
+    def generations_until_stop(checks_per_generation):
+        optimizer = CmaEs(4, [1.0], 6, 100, seed=0)
+        while not any(optimizer.stop() for _ in range(checks_per_generation)):
+            optimizer.tell({c.candidate_id: flat(c.x) for c in optimizer.ask()})
+        return optimizer.generation, optimizer.stop()
+
+    assert generations_until_stop(1) == generations_until_stop(5)
+    assert 'tolflatfitness' in generations_until_stop(1)[1]

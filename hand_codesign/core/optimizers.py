@@ -342,12 +342,11 @@ class CmaEs(AskTellOptimizer):
         with self._private_rng():
             self._es = cma.CMAEvolutionStrategy(self.x0, self.sigma0, options)
         self._before_ask = None
+        self._stop_dict = {}
 
     def stop(self):
         """Return pycma's termination criteria met (incl. 'maxiter'); empty while it runs."""
-        if self._generation == 0:
-            return {}
-        return dict(self._es.stop())
+        return dict(self._stop_dict)
 
     def _sample(self):
         # pycma keys its record of sent solutions by hash(bytes), which differs between
@@ -359,6 +358,9 @@ class CmaEs(AskTellOptimizer):
     def _update(self, points, objectives):
         self._es.tell(points, [self.fitness_of(values) for values in objectives])
         self._before_ask = None
+        # pycma's stop() advances counters (e.g. of flat fitness) at every call: check once per
+        # generation so that how often callers ask cannot change the run.
+        self._stop_dict = dict(self._es.stop())
 
     @staticmethod
     def _np_state_in_use():
