@@ -21,7 +21,10 @@ import sys
 from hand_codesign.analysis.bag import BagError
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.cli import UserError
+from hand_codesign.core.optimizers import OptimizerError
+from hand_codesign.core.optimizers import replay
 from hand_codesign.core.runs import run_task
+from hand_codesign.core.search import Search
 from hand_codesign.core.task import TaskError
 import numpy as np
 
@@ -278,14 +281,57 @@ def last_summary(record):
     return summaries.row(len(summaries) - 1)
 
 
+def told_objectives(record):
+    """Return {candidate id: objectives} as told to the optimizer, from the summaries."""
+    summaries = record.generation_summaries
+    told = {}
+    if not len(summaries) or 'told_ids' not in summaries:
+        return told
+    count = len(objective_names_of(record))
+    for index in range(len(summaries)):
+        ids = np.asarray(summaries['told_ids'][index]).ravel()
+        if ids.dtype.kind == 'f':   # the table pads the empty lists of some rows with NaN
+            ids = ids[np.isfinite(ids)]
+        ids = ids.astype(np.uint64)
+        if not len(ids) or not count:
+            continue
+        values = np.asarray(summaries['told_objectives'][index], dtype=float).ravel()
+        values = values[:len(ids) * count].reshape(len(ids), count)
+        for candidate_id, objectives in zip(ids.tolist(), values):
+            told.setdefault(int(candidate_id), objectives.copy())
+    return told
+
+
+def recorded_evaluations(record):
+    """
+    Return {candidate id: objectives} of every candidate the bag holds a result for.
+
+    Objectives told to the optimizer (summaries) come first; then the first successful
+    Evaluation of each candidate not told yet (the batch in flight when the run stopped).
+    """
+    recorded = told_objectives(record)
+    rows = evaluation_rows(record)
+    for index in np.flatnonzero(rows.ok):
+        candidate_id = int(rows.candidate_id[index])
+        objectives = rows.objectives[index]
+        if candidate_id not in recorded and np.all(np.isfinite(objectives)):
+            recorded[candidate_id] = objectives.copy()
+    return recorded
+
+
 def best_candidate_id(record):
     """
     Return the id of the run's best design.
 
     That is the optimizer's own choice in its last GenerationSummary (the lowest weighted sum
-    for CMA-ES, the front's point closest to zero for MO-CMA-ES); without summaries (a bag cut
-    early) the OK evaluation of lowest fitness.
+    for CMA-ES, the front's point closest to zero for MO-CMA-ES); for a hierarchy the best
+    design of the structure the hierarchy chose (the search replayed from the bag, as the run's
+    result); without summaries (a bag cut early) the OK evaluation of lowest fitness.
     """
+    if record.run_info is not None:
+        best = _hierarchy_best(record)
+        if best is not None:
+            return best
     summary = last_summary(record)
     if summary is not None:
         return int(summary['best_candidate_id'])
@@ -295,6 +341,23 @@ def best_candidate_id(record):
         raise UserError(f'{record.path}: the bag holds no successful evaluation, so there is '
                         'no best design')
     return int(rows.candidate_id[ok[np.argmin(rows.fitness[ok])]])
+
+
+def _hierarchy_best(record):
+    """Return the best design's id of a hierarchical run (replayed search), else None."""
+    try:
+        task = run_task_of(record)
+    except UserError:
+        return None
+    if task.hierarchy is None:
+        return None
+    search = Search(task)
+    try:
+        replay(search, recorded_evaluations(record))
+    except OptimizerError:
+        return None
+    best = search.best
+    return None if best is None else int(best[0].candidate_id)
 
 
 def ranked_candidate_id(record, generation=None, rank=0):

@@ -107,7 +107,7 @@ class Generations:
     """Per-generation statistics: structure, generation, best and median per objective."""
 
     def __init__(self, structures, generations, best, median, best_fitness, evaluations,
-                 wall_time, source):
+                 wall_time, source, rows=None):
         self.structures = structures        # list of tuples
         self.generations = generations      # np.ndarray of int
         self.best = best                    # (rows, objectives)
@@ -116,6 +116,7 @@ class Generations:
         self.evaluations = evaluations      # told so far (NaN when unknown)
         self.wall_time = wall_time
         self.source = source                # 'summaries' or 'evaluations'
+        self.rows = rows                    # the GenerationSummary rows, when from summaries
 
     def __len__(self):
         return len(self.generations)
@@ -149,7 +150,7 @@ def generations_from_summaries(record, num_objectives):
     return Generations([structures[row] for row in rows], generation[rows], best, median,
                        np.asarray(summaries['best_fitness'], dtype=float)[rows],
                        np.asarray(summaries['evaluations'], dtype=float)[rows],
-                       np.asarray(summaries['wall_time'], dtype=float)[rows], 'summaries')
+                       np.asarray(summaries['wall_time'], dtype=float)[rows], 'summaries', rows)
 
 
 def generations_from_evaluations(rows, weights):
@@ -176,18 +177,19 @@ def generations_from_evaluations(rows, weights):
                        evaluations, np.full(len(generations), np.nan), 'evaluations')
 
 
-def pareto_fronts(record, num_objectives):
-    """Return [(index, generation, front (points, objectives))] of the summaries with a front."""
+def pareto_fronts(record, num_objectives, rows):
+    """Return [(order, generation, front (points, objectives))] of summary rows with a front."""
     summaries = record.generation_summaries
     fronts = []
-    if not len(summaries) or 'pareto_front' not in summaries:
+    if not len(summaries) or 'pareto_front' not in summaries or rows is None:
         return fronts
     sizes = np.asarray(summaries['pareto_size'], dtype=np.int64)
-    for index in np.flatnonzero(sizes > 0):
-        values = np.asarray(summaries['pareto_front'][index], dtype=float)
-        values = values[np.isfinite(values)] if values.ndim == 1 else values
-        front = values.reshape(-1, num_objectives)
-        fronts.append((int(index), int(summaries['generation'][index]), front))
+    for order, index in enumerate(rows):
+        if sizes[index] <= 0:
+            continue
+        values = np.asarray(summaries['pareto_front'][index], dtype=float).ravel()
+        front = values[:sizes[index] * num_objectives].reshape(-1, num_objectives)
+        fronts.append((order, int(summaries['generation'][index]), front))
     return fronts
 
 
@@ -211,7 +213,8 @@ class Report:
             self.generations = generations_from_summaries(record, len(self.names))
         else:
             self.generations = generations_from_evaluations(self.rows, weights)
-        self.fronts = pareto_fronts(record, len(self.names)) if self.names else []
+        self.fronts = (pareto_fronts(record, len(self.names), self.generations.rows)
+                       if self.names else [])
         self.best = self._best_design()
 
     # ---------------------------------------------------------------- facts
@@ -469,7 +472,7 @@ def plot_convergence(path, generations, names, title):
     x = np.arange(len(generations))
     changes = [index for index in range(1, len(generations))
                if generations.structures[index] != generations.structures[index - 1]]
-    for index, name in enumerate(names + ['fitness (best so far)']):
+    for index, name in enumerate(names + ['fitness of the best design so far']):
         ax = axes.flat[index]
         if index < len(names):
             ax.plot(x, generations.best[:, index], label='best', color='tab:blue')
@@ -480,8 +483,15 @@ def plot_convergence(path, generations, names, title):
         else:
             ax.plot(x, generations.best_fitness, color='tab:green')
             _scale(ax, generations.best_fitness)
+        if ax.get_yscale() == 'linear':
+            ax.ticklabel_format(axis='y', useOffset=False)
         for change in changes:
             ax.axvline(change - 0.5, color='grey', linestyle=':', linewidth=0.8)
+        if changes:
+            for start in [0] + changes:
+                ax.text(start - 0.4, 0.98, 'x'.join(map(str, generations.structures[start])),
+                        transform=ax.get_xaxis_transform(), fontsize='x-small',
+                        verticalalignment='top', color='dimgrey')
         ax.set_title(name, fontsize='medium')
         ax.xaxis.get_major_locator().set_params(integer=True)
         ax.set_xlabel('generation' + (' (all structures)' if changes else ''))
@@ -522,8 +532,8 @@ def plot_pareto(path, fronts, names):
     for ax in list(axes.flat)[len(pairs):]:
         ax.axis('off')
     mappable = pyplot.cm.ScalarMappable(cmap=colormap)
-    mappable.set_clim(fronts[0][1], fronts[-1][1])
-    figure.colorbar(mappable, ax=list(axes.flat), label='generation')
+    mappable.set_clim(fronts[0][0], max(fronts[-1][0], fronts[0][0] + 1))
+    figure.colorbar(mappable, ax=list(axes.flat), label='generation (all structures, in order)')
     figure.suptitle('Pareto front per generation', fontsize='medium')
     figure.savefig(path, dpi=100)
     pyplot.close(figure)

@@ -22,50 +22,14 @@ where the interrupted run stopped, and the final result equals an uninterrupted 
 import dataclasses
 
 from hand_codesign.analysis import records
+from hand_codesign.analysis.records import recorded_evaluations
+from hand_codesign.analysis.records import told_objectives
 from hand_codesign.cli import UserError
 from hand_codesign.core.optimizers import replay
 from hand_codesign.core.optimizers import ReplayError
 from hand_codesign.core.optimizers import TellError
 from hand_codesign.core.search import Search
 import numpy as np
-
-
-def told_objectives(record):
-    """Return {candidate id: objectives} as told to the optimizer, from the summaries."""
-    summaries = record.generation_summaries
-    told = {}
-    if not len(summaries) or 'told_ids' not in summaries:
-        return told
-    count = len(records.objective_names_of(record))
-    for index in range(len(summaries)):
-        ids = np.asarray(summaries['told_ids'][index]).ravel()
-        if ids.dtype.kind == 'f':   # the table pads the empty lists of some rows with NaN
-            ids = ids[np.isfinite(ids)]
-        ids = ids.astype(np.uint64)
-        if not len(ids) or not count:
-            continue
-        values = np.asarray(summaries['told_objectives'][index], dtype=float).ravel()
-        values = values[:len(ids) * count].reshape(len(ids), count)
-        for candidate_id, objectives in zip(ids.tolist(), values):
-            told.setdefault(int(candidate_id), objectives.copy())
-    return told
-
-
-def recorded_evaluations(record):
-    """
-    Return {candidate id: objectives} of every candidate the bag holds a result for.
-
-    Objectives told to the optimizer (summaries) come first; then the first successful
-    Evaluation of each candidate not told yet (the batch in flight when the run stopped).
-    """
-    recorded = told_objectives(record)
-    rows = records.evaluation_rows(record)
-    for index in np.flatnonzero(rows.ok):
-        candidate_id = int(rows.candidate_id[index])
-        objectives = rows.objectives[index]
-        if candidate_id not in recorded and np.all(np.isfinite(objectives)):
-            recorded[candidate_id] = objectives.copy()
-    return recorded
 
 
 def recorded_genomes(record):
@@ -143,3 +107,7 @@ def resume_point(bag_or_record):
     return ResumePoint(record=record, run_id=record.run_id, task=task, search=search,
                        batches_told=batches, evaluations_told=told, known=known,
                        recorded=recorded)
+
+
+__all__ = ['recorded_evaluations', 'recorded_genomes', 'resume_point', 'ResumePoint',
+           'told_objectives']
