@@ -1,5 +1,6 @@
 """`hand-codesign analyze`: the report folder of a real run, its CSV against the bag, bad bags."""
 
+import copy
 import csv
 
 from analysis_run import copy_bag
@@ -180,3 +181,20 @@ def test_gene_columns_are_the_task_genes(report):
     header = (report / 'evaluations.csv').read_text().splitlines()[0].split(',')
     names = genome_spec(run_task(TASK.read_text(), str(TASK), 3, 4, 6, 2)).names
     assert header[-len(names):] == names
+
+
+def test_rejections_and_duplicate_answers_are_marked(tmp_path):
+    messages = sample_messages(generations=2, population=6)
+    evaluations = messages[topics.EVALUATIONS]
+    evaluations.append(copy.deepcopy(evaluations[2]))     # a late second answer
+    bag = tmp_path / 'sample.mcap'
+    write_bag(bag, messages)
+    out = tmp_path / 'report'
+    assert main(['analyze', str(bag), '--out', str(out)]) == 0
+    rows = read_csv(out / 'evaluations.csv')
+    assert [row['status'] for row in rows].count('duplicate') == 1
+    rejected = [row for row in rows if row['status'] == 'rejected']
+    assert len(rejected) == 1 and rejected[0]['candidate_id'] == '5'
+    assert rejected[0]['reason'] == 'genome has NaN — rejected'
+    assert rejected[0]['position_1'] == rejected[0]['fitness'] == ''
+    assert '11 ok, 1 rejected, 1 duplicate' in (out / 'report.md').read_text()
