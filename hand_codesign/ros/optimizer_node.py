@@ -87,7 +87,9 @@ class OptimizerNode(Node):
             f'{self.task.iterations} generations x {self.task.population}, '
             f'{self.task.num_world_states} world states, seed {self.task.seed}; '
             f'waiting for {self.param("evaluators_expected")} evaluator(s)')
-        self.create_timer(0.01, self.tick)
+        # Evaluations and heartbeats drive the run; the timer only starts it and catches
+        # silent evaluators and overdue candidates, so the node costs no CPU while it waits.
+        self.create_timer(0.2, self.tick)
 
     def param(self, name):
         return self.get_parameter(name).value
@@ -116,6 +118,7 @@ class OptimizerNode(Node):
     def on_status(self, message):
         if message.run_id in ('', self.run_id):
             self.dispatcher.heard_from(message.evaluator_id, message.capacity, time.monotonic())
+            self.advance()
 
     def on_evaluation(self, message):
         if message.run_id != self.run_id:
@@ -129,6 +132,7 @@ class OptimizerNode(Node):
         if self.dispatcher.complete(message.candidate_id, message.evaluator_id):
             self.results[message.candidate_id] = np.array(message.objectives, dtype=float)
             self.wall_times.append(message.wall_time)
+            self.advance()
 
     def ready_to_start(self):
         now = time.monotonic()
@@ -140,13 +144,15 @@ class OptimizerNode(Node):
         return enough_evaluators and matched
 
     def tick(self):
-        if self.finished.done():
-            return
-        if self.started is None:
-            if not self.ready_to_start():
-                return
+        if self.started is None and self.ready_to_start():
             self.started = time.monotonic()
             self.get_logger().info('evaluators ready, starting')
+        self.advance()
+
+    def advance(self):
+        """Send what can be sent; tell the batch when complete and start the next one."""
+        if self.started is None or self.finished.done():
+            return
         if self.batch is None:
             if self.search.stop():
                 self.finish()
@@ -162,6 +168,7 @@ class OptimizerNode(Node):
             self.publish(topics.CANDIDATES, message)
         if self.dispatcher.unfinished == 0:
             self.tell_batch()
+            self.advance()
 
     def start_batch(self):
         self.batch = self.search.ask()
