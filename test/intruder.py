@@ -3,7 +3,8 @@ Disturb a run: publish a foreign run and malformed candidates into the run's ROS
 
 Started by test_system.py before the run; waits for the run's RunInfo, then publishes a
 RunInfo and a Candidate of a foreign run, a Candidate of the run with a genome of the wrong
-length, one with NaN values, and an Evaluation of the foreign run.
+length, one with NaN values, one of an impossible structure, and an Evaluation of the foreign
+run.
 """
 
 import sys
@@ -38,7 +39,9 @@ def main():
     publishers[topics.CANDIDATES].publish(Candidate(
         run_id=run_id, candidate_id=10**9, genome=[0.5], structure=[2, 2]))
     publishers[topics.CANDIDATES].publish(Candidate(
-        run_id=run_id, candidate_id=10**9 + 1, genome=[float('nan')] * 64, structure=[2, 2]))
+        run_id=run_id, candidate_id=10**9 + 1, genome=[float('nan')] * 24, structure=[2, 2]))
+    publishers[topics.CANDIDATES].publish(Candidate(
+        run_id=run_id, candidate_id=10**9 + 2, genome=[0.5] * 24, structure=[0, 7]))
     publishers[topics.EVALUATIONS].publish(Evaluation(
         run_id='foreign-run', candidate_id=0, objectives=[0.0] * size, evaluator_id='intruder'))
     for publisher in publishers.values():

@@ -156,7 +156,10 @@ def test_foreign_and_malformed_messages_do_not_disturb_a_run(one_evaluator_run, 
     record = read_run(disturbed, run_id=run_id)
     assert 'foreign-run' in record.run_ids
     rejected = record.evaluations.select(record.evaluations['status'] == 1)
-    assert len(rejected) >= 1 and 'genome' in ' '.join(rejected['reason'])
+    reasons = ' '.join(rejected['reason'])
+    assert 'genome has 1 values' in reasons
+    assert 'NaN' in reasons
+    assert 'structure' in reasons
 
 
 def test_hierarchy_task_searches_structures_bottom_up(tmp_path):
