@@ -9,10 +9,7 @@ import argparse
 import importlib
 import sys
 
-
-class UserError(Exception):
-    """A mistake of the user's (bad file, bad flag): printed as one clear line, no traceback."""
-
+from hand_codesign.errors import UserError
 
 # verb -> (module, function, one-line help); the function takes the parsed arguments.
 VERBS = {

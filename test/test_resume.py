@@ -14,8 +14,8 @@ from analysis_run import TASK
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.resume import recorded_evaluations
 from hand_codesign.analysis.resume import resume_point
-from hand_codesign.cli import UserError
 from hand_codesign.core.evaluate import evaluate
+from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
 import numpy as np
 import pytest

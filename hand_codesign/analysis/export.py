@@ -27,7 +27,6 @@ import pathlib
 import xml.etree.ElementTree as ElementTree
 
 from hand_codesign.analysis import records
-from hand_codesign.cli import UserError
 from hand_codesign.core.design import ControllerDesign
 from hand_codesign.core.design import Design
 from hand_codesign.core.design import FingerDesign
@@ -39,6 +38,7 @@ from hand_codesign.core.hand import hand_model
 from hand_codesign.core.hand import hand_urdf
 from hand_codesign.core.runs import run_task
 from hand_codesign.core.task import TaskError
+from hand_codesign.errors import UserError
 import numpy as np
 import yaml
 

@@ -20,12 +20,12 @@ import sys
 
 from hand_codesign.analysis.bag import BagError
 from hand_codesign.analysis.bag import read_run
-from hand_codesign.cli import UserError
 from hand_codesign.core.optimizers import OptimizerError
 from hand_codesign.core.optimizers import replay
 from hand_codesign.core.runs import run_task
 from hand_codesign.core.search import Search
 from hand_codesign.core.task import TaskError
+from hand_codesign.errors import UserError
 import numpy as np
 
 STATUS_OK = 0

@@ -19,7 +19,6 @@ import sys
 import time
 
 from hand_codesign.analysis import records
-from hand_codesign.cli import UserError
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.evaluate import evaluate_design
 from hand_codesign.core.genome import genome_spec
@@ -27,6 +26,7 @@ from hand_codesign.core.sim import object_shape
 from hand_codesign.core.sim import Simulator
 from hand_codesign.core.worlds import object_state
 from hand_codesign.core.worlds import world_states
+from hand_codesign.errors import UserError
 import numpy as np
 
 FRAMES_PER_SECOND = 25

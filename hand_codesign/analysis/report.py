@@ -24,8 +24,8 @@ import pathlib
 import sys
 
 from hand_codesign.analysis import records
-from hand_codesign.cli import UserError
 from hand_codesign.core.genome import genome_spec
+from hand_codesign.errors import UserError
 import numpy as np
 
 MAX_TABLE_ROWS = 12

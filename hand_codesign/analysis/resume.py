@@ -24,11 +24,11 @@ import dataclasses
 from hand_codesign.analysis import records
 from hand_codesign.analysis.records import recorded_evaluations
 from hand_codesign.analysis.records import told_objectives
-from hand_codesign.cli import UserError
 from hand_codesign.core.optimizers import replay
 from hand_codesign.core.optimizers import ReplayError
 from hand_codesign.core.optimizers import TellError
 from hand_codesign.core.search import Search
+from hand_codesign.errors import UserError
 import numpy as np
 
 

@@ -23,11 +23,11 @@ import time
 
 from hand_codesign.analysis import records
 from hand_codesign.analysis.report import write_csv
-from hand_codesign.cli import UserError
 from hand_codesign.core.robustness import evaluate_robustness
 from hand_codesign.core.worlds import grid_world_states
 from hand_codesign.core.worlds import randomized_quantities
 from hand_codesign.core.worlds import world_states
+from hand_codesign.errors import UserError
 import numpy as np
 
 PERCENTILES = (5, 25, 50, 75, 90, 95, 99)

@@ -7,11 +7,13 @@ by candidate id, tells the optimizer once per generation, publishes a Generation
 ends with the final summary and, when asked, a result file.
 """
 
+import collections
 import json
 import os
 import sys
 import time
 
+from hand_codesign.analysis.resume import resume_point
 from hand_codesign.core import genome_spec
 from hand_codesign.core.dispatch import Dispatcher
 from hand_codesign.core.dispatch import DispatchError
@@ -22,6 +24,7 @@ from hand_codesign.core.summary import generation_summary
 from hand_codesign.core.summary import progress_line
 from hand_codesign.core.task import load_task
 from hand_codesign.core.task import TaskError
+from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import candidate_message
 from hand_codesign.ros.conversions import stamp_now
@@ -48,6 +51,8 @@ PARAMETERS = {
     'heartbeat_timeout': (5.0, 'seconds of evaluator silence before its candidates move on'),
     'evaluation_timeout': (0.0, 'seconds before a candidate is sent again; 0: adaptive'),
     'result_file': ('', 'write the final result as JSON here; empty: do not'),
+    'resume_bag': ('', 'continue the interrupted run of this bag (its task, seed and budget; '
+                       'task_file and the budget parameters are then ignored)'),
 }
 
 
@@ -58,18 +63,27 @@ class OptimizerNode(Node):
         for name, (default, description) in PARAMETERS.items():
             self.declare_parameter(name, default, ParameterDescriptor(description=description))
         self.finished = Future()
-        self.task = self.load_run_task()
+        self.resumed = None
+        if self.param('resume_bag'):
+            # the search replayed from the bag up to the interruption (core.optimizers.replay)
+            self.resumed = resume_point(self.param('resume_bag'))
+            self.task = self.resumed.task
+            self.search = self.resumed.search
+            self.told = self.resumed.evaluations_told
+            self.get_logger().info(self.resumed.describe())
+        else:
+            self.task = self.load_run_task()
+            self.search = Search(self.task)
+            self.told = 0
         self.run_id = (self.param('run_id')
                        or f'{self.task.name}-{time.strftime("%Y%m%d-%H%M%S")}-{os.getpid()}')
-        self.search = Search(self.task)
         self.batch = None
-        self.told = 0
         self.dispatcher = Dispatcher(self.param('heartbeat_timeout'),
                                      self.param('evaluation_timeout') or 3600.0)
         self.adaptive_timeout = self.param('evaluation_timeout') <= 0
         self.results = {}
         self.last_summary = None
-        self.wall_times = []
+        self.wall_times = collections.deque(maxlen=50)
         self.started = None
 
         self.publishers_ = {
@@ -113,6 +127,7 @@ class OptimizerNode(Node):
             seed=task.seed, algorithm=task.algorithm, iterations=task.iterations,
             population=task.population, world_states=task.num_world_states,
             objective_names=list(task.objective_names), versions=library_versions(),
+            resumed_from=self.resumed.run_id if self.resumed is not None else '',
             stamp=stamp_now(self))
 
     def on_status(self, message):
@@ -159,7 +174,7 @@ class OptimizerNode(Node):
                 return
             self.start_batch()
         if self.adaptive_timeout and self.wall_times:
-            self.dispatcher.evaluation_timeout = max(60.0, 20.0 * max(self.wall_times[-50:]))
+            self.dispatcher.evaluation_timeout = max(60.0, 20.0 * max(self.wall_times))
         for candidate, evaluator_id, attempt in self.dispatcher.assignments(time.monotonic()):
             message = candidate_message(self.run_id, candidate, candidate.structure,
                                         self.batch_genome_names, evaluator_id, attempt)
@@ -173,8 +188,12 @@ class OptimizerNode(Node):
     def start_batch(self):
         self.batch = self.search.ask()
         self.batch_genome_names = genome_spec(self.search.batch_task).names
-        self.results = {}
-        self.dispatcher.add(self.batch)
+        # a resumed run's first batch may be partly evaluated already (in the bag)
+        known = self.resumed.known if self.resumed is not None else {}
+        self.results = {candidate.candidate_id: known[candidate.candidate_id]
+                        for candidate in self.batch if candidate.candidate_id in known}
+        self.dispatcher.add([candidate for candidate in self.batch
+                             if candidate.candidate_id not in self.results])
 
     def tell_batch(self):
         checking = self.search.checking
@@ -206,9 +225,15 @@ class OptimizerNode(Node):
     def finish(self):
         stop_reason = ', '.join(f'{key}={value}' for key, value in self.search.stop().items())
         result, structure = self.search.best
-        summary = dict(self.last_summary, final=True, stop_reason=stop_reason, told_ids=[],
+        # after a resume, the last batch may have been a hierarchy check: no generation yet
+        last = self.last_summary or generation_summary(
+            self.search.optimizer.generation, structure, self.task.objective_names,
+            [result.candidate_id], result.objectives.reshape(1, -1), result, self.told, 0.0)
+        summary = dict(last, final=True, stop_reason=stop_reason, told_ids=[],
                        told_objectives=np.zeros((0, len(self.task.objective_names))),
-                       wall_time=time.monotonic() - self.started)
+                       wall_time=time.monotonic() - self.started, structure=structure,
+                       best_id=result.candidate_id, best_objectives=result.objectives,
+                       best_fitness=result.fitness, best_x=result.x)
         self.publish(topics.GENERATION_SUMMARY, summary_message(self.run_id, summary))
         for publisher in self.publishers_.values():
             publisher.wait_for_all_acked(Duration(seconds=5.0))
@@ -241,7 +266,7 @@ def main(args=None):
         rclpy.spin_until_future_complete(node, node.finished)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except (TaskError, DispatchError) as error:
+    except (TaskError, DispatchError, UserError) as error:
         print(f'optimizer: error: {error}', file=sys.stderr)
         return 2
     finally:

@@ -21,10 +21,10 @@ import sys
 import threading
 import time
 
-from hand_codesign.cli import UserError
 from hand_codesign.core.runs import run_task
 from hand_codesign.core.task import load_task
 from hand_codesign.core.task import TaskError
+from hand_codesign.errors import UserError
 
 READY_LINE = 'recorder ready'
 DOMAIN_IDS = range(1, 101)
@@ -43,7 +43,8 @@ def run_command(arguments):
     with claimed_domain(arguments.domain_id) as domain_id:
         system = System(bag, domain_id, quiet=arguments.quiet)
         say = system.say
-        say(f'run: task {task.name} ({arguments.task}), {arguments.evaluators} evaluators, '
+        source = arguments.task or f'resumed from {arguments.resume}'
+        say(f'run: task {task.name} ({source}), {arguments.evaluators} evaluators, '
             f'ROS_DOMAIN_ID={domain_id}, bag {bag}')
         try:
             code = system.run(arguments, task)
@@ -65,7 +66,7 @@ def run_command(arguments):
 def check_arguments(arguments):
     """Return the run's Task, or raise UserError naming the bad flag or file."""
     if arguments.resume:
-        raise UserError('--resume is not available in this version yet')
+        return resumed_task(arguments)
     if not arguments.task:
         raise UserError('--task FILE is required (e.g. config/tasks/task5.yaml)')
     if arguments.evaluators < 0:
@@ -82,6 +83,20 @@ def check_arguments(arguments):
                         arguments.iterations, arguments.popsize, arguments.world_states)
     except TaskError as error:
         raise UserError(str(error))
+
+
+def resumed_task(arguments):
+    """Return the Task of the interrupted run in --resume's bag; it fixes task and budget."""
+    given = [flag for flag in ('task', 'seed', 'iterations', 'popsize', 'world_states')
+             if getattr(arguments, flag) is not None]
+    if given:
+        raise UserError('--resume takes the task, seed and budget from the bag; drop '
+                        + ', '.join('--' + flag.replace('_', '-') for flag in given))
+    from hand_codesign.analysis.resume import resume_point
+    point = resume_point(arguments.resume)
+    if not arguments.quiet:
+        print(point.describe(), flush=True)
+    return point.task
 
 
 def default_bag_path(task_name):
@@ -155,13 +170,18 @@ class System:
                 'evaluator_node', {'evaluator_id': f'evaluator-{index}',
                                    'subscribers_expected': 2},
                 stdout=log, stderr=subprocess.STDOUT))
-        self.optimizer = self.node('optimizer_node', {
-            'task_file': pathlib.Path(arguments.task).resolve(),
-            'seed': task.seed, 'iterations': task.iterations, 'population': task.population,
-            'world_states': task.num_world_states,
+        parameters = {
             'evaluators_expected': max(1, arguments.evaluators), 'subscribers_expected': 1,
-            'result_file': self.bag / 'result.json',
-        }, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            'result_file': self.bag / 'result.json'}
+        if arguments.resume:
+            parameters['resume_bag'] = pathlib.Path(arguments.resume).resolve()
+        else:
+            parameters.update({
+                'task_file': pathlib.Path(arguments.task).resolve(), 'seed': task.seed,
+                'iterations': task.iterations, 'population': task.population,
+                'world_states': task.num_world_states})
+        self.optimizer = self.node('optimizer_node', parameters, stdout=subprocess.PIPE,
+                                   stderr=subprocess.STDOUT, text=True)
         relay = threading.Thread(target=self.relay_optimizer, daemon=True)
         relay.start()
         code = self.wait_for_optimizer()
