@@ -52,8 +52,9 @@ $(STAMPS)/package: $(STAMPS)/msgs setup.py setup.cfg
 
 demo: setup
 	@mkdir -p bags
-	$(VENV)/bin/hand-codesign run --task $(DEMO_TASK) \
-	  --bag bags/demo-$$(date +%Y%m%d-%H%M%S) $(DEMO_ARGS)
+	@bag=bags/demo-$$(date +%Y%m%d-%H%M%S) && \
+	  $(VENV)/bin/hand-codesign run --task $(DEMO_TASK) --bag $$bag $(DEMO_ARGS) && \
+	  $(VENV)/bin/hand-codesign analyze $$bag
 
 test: setup
 	$(PY) -m pytest test $(TEST_ARGS)

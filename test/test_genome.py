@@ -112,6 +112,17 @@ def test_round_trip(name):
     assert spec.encode(spec.values(mean)) == pytest.approx(mean)
 
 
+def test_design_values_show_sorted_limits_that_hold_the_initial_angle():
+    spec = genome_spec(load_task(TASKS / 'task5.yaml'))
+    for x in np.random.default_rng(5).uniform(-1.0, 2.0, size=(10, spec.size)):
+        values = spec.design_values(x)
+        for finger in range(2):
+            for joint in range(2):
+                prefix = f'finger{finger}.joint{joint}.'
+                lower, upper = values[prefix + 'lower_limit'], values[prefix + 'upper_limit']
+                assert lower <= values[prefix + 'initial_angle'] <= upper
+
+
 def test_joint_limits_are_sorted_and_hold_the_initial_angle():
     spec = genome_spec(load_task(TASKS / 'task5.yaml'))
     x = spec.initial_mean()

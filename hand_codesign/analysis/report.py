@@ -297,7 +297,7 @@ class Report:
         try:
             task = records.design_task(self.record, design)
             spec = genome_spec(task)
-            values = spec.values(design.x)
+            values = spec.design_values(design.x)
         except (UserError, ValueError) as error:
             self.task_problem = self.task_problem or str(error)
             return []

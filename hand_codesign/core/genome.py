@@ -101,6 +101,15 @@ class GenomeSpec:
         """Return {gene name: physical value} of normalized genome x (limits unsorted)."""
         return dict(zip(self.names, self.to_physical(x).tolist()))
 
+    def design_values(self, x):
+        """
+        Return {gene name: physical value} as the Design of x holds them.
+
+        Unlike `values`, each joint's limit pair is sorted and its initial angle clipped into
+        the limits: what a person reading a report or building the hand needs.
+        """
+        return dict(zip(self.names, self._builder.extract(self.decode(x)).tolist()))
+
     def decode(self, x) -> Design:
         """Return the Design of normalized genome x (any real values; see the module doc)."""
         return self._builder.design(self.to_physical(x))

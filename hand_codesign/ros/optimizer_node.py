@@ -253,7 +253,8 @@ class OptimizerNode(Node):
                 'best_candidate_id': result.candidate_id, 'generation': result.generation,
                 'fitness': result.fitness,
                 'objectives': dict(zip(self.task.objective_names, result.objectives.tolist())),
-                'design': genome_spec(self.task.replace(structure=structure)).values(result.x),
+                'design': genome_spec(self.task.replace(structure=structure)).design_values(
+                    result.x),
                 'published': self.published,
             }, stream, indent=2)
 
