@@ -47,8 +47,7 @@ import math
 from typing import Callable, Optional
 
 from hand_codesign.core.hand import build_hand, HandModel
-import pybullet
-from pybullet_utils.bullet_client import BulletClient
+from hand_codesign.core.quiet_pybullet import BulletClient, c_output_silenced, pybullet
 
 GRAVITY = -9.81  # m / s^2 along world z
 SOLVER_ITERATIONS = 50
@@ -130,7 +129,8 @@ class Simulator:
     """A PyBullet client with the scene of one candidate and the rollout loop."""
 
     def __init__(self, rendering=False):
-        self.client = Client(connection_mode=pybullet.DIRECT)
+        with c_output_silenced():
+            self.client = Client(connection_mode=pybullet.DIRECT)
         if not rendering:
             self.client.unloadPlugin(self.client.loadPlugin('tinyRendererPlugin'))
         self.rendering = rendering

@@ -44,7 +44,7 @@ def run_command(arguments):
         system = System(bag, domain_id, quiet=arguments.quiet)
         say = system.say
         source = arguments.task or f'resumed from {arguments.resume}'
-        say(f'run: task {task.name} ({source}), {arguments.evaluators} evaluators, '
+        say(f'run: task {task.name} ({source}), evaluators: {arguments.evaluators}, '
             f'ROS_DOMAIN_ID={domain_id}, bag {bag}')
         try:
             code = system.run(arguments, task)
