@@ -29,7 +29,8 @@ VERBS = {
 def add_run_arguments(parser):
     parser.add_argument('--task', help='task file (YAML), e.g. config/tasks/task5.yaml')
     parser.add_argument('--evaluators', type=int, default=2,
-                        help='evaluator processes to start (default 2)')
+                        help='evaluator processes to start (default 2; 0: wait for '
+                             'evaluators started elsewhere)')
     parser.add_argument('--bag', help='where to write the bag (a new folder)')
     parser.add_argument('--seed', type=int, help="run seed (default: the task file's)")
     parser.add_argument('--iterations', type=int, help='generations per structure')

@@ -174,3 +174,24 @@ def test_hierarchy_task_searches_structures_bottom_up(tmp_path):
     assert 'structure [1]: best design on the evaluation worlds' in output
     result = json.loads((bag / 'result.json').read_text())
     assert tuple(result['structure']) in structures
+
+
+def test_terminated_run_stops_every_process_and_closes_its_bag(tmp_path):
+    bag = tmp_path / 'terminated'
+    process = start_run(bag, 2, budget=['--iterations', '50', '--popsize', '6',
+                                        '--world-states', '3'])
+    lines = []
+    threading.Thread(target=lambda: lines.extend(process.stdout), daemon=True).start()
+    deadline = time.monotonic() + 120
+    while not any('generation 2/50' in line for line in lines):
+        assert time.monotonic() < deadline and process.poll() is None, ''.join(lines)
+        time.sleep(0.05)
+    children = psutil.Process(process.pid).children(recursive=True)
+    assert len(children) >= 4
+    process.send_signal(signal.SIGTERM)
+    assert process.wait(timeout=120) == 130
+    gone, alive = psutil.wait_procs(children, timeout=10)
+    assert not alive, [child.cmdline() for child in alive]
+    record = read_run(bag)
+    assert not record.truncated and not record.warnings
+    assert len(record.generation_summaries) >= 2

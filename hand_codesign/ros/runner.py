@@ -47,7 +47,8 @@ def run_command(arguments):
         say(f'run: task {task.name} ({source}), evaluators: {arguments.evaluators}, '
             f'ROS_DOMAIN_ID={domain_id}, bag {bag}')
         try:
-            code = system.run(arguments, task)
+            with termination_as_interrupt():
+                code = system.run(arguments, task)
         except KeyboardInterrupt:
             say('interrupted: stopping the evaluators and closing the bag')
             system.stop_all()
@@ -61,6 +62,21 @@ def run_command(arguments):
     print(f'bag: {bag}')
     print(f'best design: {best_design_line(bag / "result.json")}')
     return 0
+
+
+@contextlib.contextmanager
+def termination_as_interrupt():
+    """Treat SIGTERM and SIGHUP like Ctrl-C, so that the processes of the run are stopped."""
+    def interrupt(signal_number, frame):
+        raise KeyboardInterrupt
+
+    previous = {number: signal.signal(number, interrupt)
+                for number in (signal.SIGTERM, signal.SIGHUP)}
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
 
 
 def check_arguments(arguments):
@@ -211,6 +227,9 @@ class System:
 
     def wait_for_optimizer(self):
         while self.optimizer.poll() is None:
+            if self.recorder.poll() is not None:
+                self.say(f'the recorder exited (code {self.recorder.returncode}); stopping')
+                return 1
             if self.evaluators and all(p.poll() is not None for p in self.evaluators):
                 self.say('every evaluator exited: see the logs in '
                          f'{self.bag / "logs"}; stopping')
