@@ -36,13 +36,14 @@ class CandidateRejected(Exception):
 
 
 class EvaluatorNode(Node):
+    """Evaluate the candidates addressed to it and answer each with an Evaluation."""
 
     def __init__(self):
         super().__init__('evaluator')
         self.declare_parameter('evaluator_id', '', ParameterDescriptor(
             description='unique name of this evaluator; empty: <host>-<pid>'))
         self.declare_parameter('run_id', '', ParameterDescriptor(
-            description='serve only this run; empty: the run of the latest RunInfo'))
+            description='serve only this run; empty: every run it hears of'))
         self.declare_parameter('capacity', 2, ParameterDescriptor(
             description='candidates it asks to have queued at once'))
         self.declare_parameter('heartbeat_period', 0.5, ParameterDescriptor(
@@ -57,7 +58,7 @@ class EvaluatorNode(Node):
         self.subscribers_expected = self.get_parameter('subscribers_expected').value
 
         self.runs = {}  # run id -> RunInfo message
-        self.tasks = {}  # (run id, structure) -> Task
+        self.tasks = {}  # (run id, structure, world states) -> (Task, GenomeSpec)
         self.seen = set()  # (run id, candidate id, attempt) already queued
         self.done = 0
         self.steps_per_second = 0.0

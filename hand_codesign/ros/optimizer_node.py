@@ -57,6 +57,7 @@ PARAMETERS = {
 
 
 class OptimizerNode(Node):
+    """Drive the run's search over the evaluators, one generation at a time."""
 
     def __init__(self):
         super().__init__('optimizer')
