@@ -195,3 +195,35 @@ def test_terminated_run_stops_every_process_and_closes_its_bag(tmp_path):
     record = read_run(bag)
     assert not record.truncated and not record.warnings
     assert len(record.generation_summaries) >= 2
+
+
+def test_nodes_started_by_hand_with_parameter_files(tmp_path):
+    env = dict(os.environ, ROS_DOMAIN_ID=str(next(DOMAINS)))
+    bin_folder = pathlib.Path(sys.prefix) / 'bin'
+    config = ROOT / 'config'
+
+    def node(name, *parameters, **popen):
+        command = [str(bin_folder / name), '--ros-args', '--params-file',
+                   str(config / f'{name}.yaml')]
+        for parameter in parameters:
+            command += ['-p', parameter]
+        return subprocess.Popen(command, cwd=ROOT, env=env, **popen)
+
+    bag = tmp_path / 'by-hand'
+    recorder = node('recorder', f'bag_path:={bag}')
+    evaluator = node('evaluator', 'subscribers_expected:=2', stdout=subprocess.DEVNULL)
+    optimizer = node('optimizer', 'iterations:=2', 'population:=4', 'world_states:=2',
+                     f'result_file:={tmp_path / "result.json"}', stderr=subprocess.PIPE,
+                     text=True)
+    try:
+        _, log = optimizer.communicate(timeout=180)
+        assert optimizer.returncode == 0, log
+    finally:
+        for process in (optimizer, evaluator, recorder):
+            if process.poll() is None:
+                process.send_signal(signal.SIGINT)
+            process.wait(timeout=60)
+    result = json.loads((tmp_path / 'result.json').read_text())
+    assert result['task'] == 'task5' and result['evaluations'] == 8
+    summaries_table = read_run(bag).generation_summaries
+    assert list(summaries_table['final']) == [False, False, True]
