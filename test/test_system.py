@@ -138,6 +138,7 @@ def test_killed_evaluator_does_not_change_the_result(one_evaluator_run, tmp_path
     assert told == 3 * 6
     ok = record.evaluations.select(record.evaluations['status'] == 0)
     assert sorted(set(ok['candidate_id'])) == list(range(18))
+    assert max(record.candidates['attempt']) >= 1, 'no candidate had to be sent again'
     assert summaries(killed) == summaries(bag)
 
 
