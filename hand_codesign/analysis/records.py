@@ -16,6 +16,7 @@ work on the RunRecord it returns:
 """
 
 import dataclasses
+import pathlib
 import sys
 
 from hand_codesign.analysis.bag import BagError
@@ -30,6 +31,13 @@ import numpy as np
 
 STATUS_OK = 0
 STATUS_NAMES = {0: 'ok', 1: 'rejected'}
+
+
+def beside_bag(bag_path, suffix):
+    """Return the path `<bag name><suffix>` next to the bag (a folder or an .mcap file)."""
+    path = pathlib.Path(bag_path).resolve()
+    stem = path.stem if path.is_file() else path.name
+    return path.parent / f'{stem}{suffix}'
 
 
 def open_run(path, warn=True):

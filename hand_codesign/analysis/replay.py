@@ -78,9 +78,7 @@ def chosen_design(record, generation, rank):
 
 def default_gif_path(bag_path, candidate_id, world):
     """Return `<bag>_candidate<id>_world<W>.gif` next to the bag."""
-    path = pathlib.Path(bag_path).resolve()
-    stem = path.stem if path.is_file() else path.name
-    return path.parent / f'{stem}_candidate{candidate_id}_world{world}.gif'
+    return records.beside_bag(bag_path, f'_candidate{candidate_id}_world{world}.gif')
 
 
 def same_bits(first, second):

@@ -44,9 +44,7 @@ def analyze_command(arguments):
 
 def default_report_dir(bag_path):
     """Return `<bag>_report` next to the bag (a folder, or an .mcap file without suffix)."""
-    path = pathlib.Path(bag_path).resolve()
-    stem = path.stem if path.is_file() else path.name
-    return path.parent / f'{stem}_report'
+    return records.beside_bag(bag_path, '_report')
 
 
 def _number(value):

@@ -75,9 +75,7 @@ def available_cores():
 
 def default_output_dir(bag_path):
     """Return `<bag>_robustness` next to the bag."""
-    path = pathlib.Path(bag_path).resolve()
-    stem = path.stem if path.is_file() else path.name
-    return path.parent / f'{stem}_robustness'
+    return records.beside_bag(bag_path, '_robustness')
 
 
 def chunk_size(count, workers):

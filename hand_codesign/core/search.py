@@ -68,14 +68,3 @@ class Search:
             return outcome.result, outcome.structure
         result = self.optimizer.result
         return None if result is None else (result, self.batch_task.structure)
-
-    def replay(self, recorded):
-        """Tell whole batches from recorded id -> objectives; return how many were told."""
-        told = 0
-        while not self.stop():
-            batch = self.ask()
-            if not all(candidate.candidate_id in recorded for candidate in batch):
-                break
-            self.tell({c.candidate_id: recorded[c.candidate_id] for c in batch})
-            told += 1
-        return told
