@@ -23,7 +23,6 @@ from hand_codesign.analysis.bag import BagError
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.core.optimizers import OptimizerError
 from hand_codesign.core.optimizers import replay
-from hand_codesign.core.runs import run_task
 from hand_codesign.core.search import Search
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
@@ -65,9 +64,7 @@ def run_task_of(record, structure=None, world_states=None):
     """Return the Task of the run (for `structure` and `world_states` when given)."""
     info = require_run_info(record, 'rebuilding the task')
     try:
-        return run_task(info.task_yaml, f'{record.path} (RunInfo.task_yaml)', info.seed,
-                        info.iterations, info.population, world_states or info.world_states,
-                        structure)
+        return info.task(structure, f'{record.path} (RunInfo.task_yaml)', world_states)
     except (TaskError, ValueError) as error:
         raise UserError(f'{record.path}: the task recorded in the bag cannot be rebuilt: '
                         f'{error}') from None

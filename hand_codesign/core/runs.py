@@ -8,6 +8,7 @@ replay, analysis, resume) rebuilds it with `run_task`, so they all agree on it e
 
 import importlib.metadata
 
+from hand_codesign.core.task import load_task
 from hand_codesign.core.task import parse_task
 
 VERSIONED_PACKAGES = ['hand_codesign', 'pybullet', 'cma', 'deap', 'numpy']
@@ -15,7 +16,19 @@ VERSIONED_PACKAGES = ['hand_codesign', 'pybullet', 'cma', 'deap', 'numpy']
 
 def run_task(task_yaml, source, seed, iterations, population, world_states, structure=None):
     """Return the Task of a run from its task text and overrides (0 or None keeps the file's)."""
-    task = parse_task(task_yaml, source=source)
+    return with_overrides(parse_task(task_yaml, source=source), seed, iterations, population,
+                          world_states, structure)
+
+
+def load_run_task(path, seed=None, iterations=None, population=None, world_states=None):
+    """Return the Task a run of the task file at path uses (None keeps the file's values)."""
+    task = load_task(path)
+    return with_overrides(task, task.seed if seed is None else seed, iterations, population,
+                          world_states)
+
+
+def with_overrides(task, seed, iterations, population, world_states, structure=None):
+    """Return task with a run's overrides applied (0 or None keeps the task's value)."""
     changes = {'seed': int(seed)}
     if iterations:
         changes['iterations'] = int(iterations)

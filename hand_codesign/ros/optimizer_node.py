@@ -18,11 +18,10 @@ from hand_codesign.core import genome_spec
 from hand_codesign.core.dispatch import Dispatcher
 from hand_codesign.core.dispatch import DispatchError
 from hand_codesign.core.runs import library_versions
-from hand_codesign.core.runs import run_task
+from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.search import Search
 from hand_codesign.core.summary import generation_summary
 from hand_codesign.core.summary import progress_line
-from hand_codesign.core.task import load_task
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
@@ -73,7 +72,10 @@ class OptimizerNode(Node):
             self.told = self.resumed.evaluations_told
             self.get_logger().info(self.resumed.describe())
         else:
-            self.task = self.load_run_task()
+            seed = self.param('seed')
+            self.task = load_run_task(self.param('task_file'), None if seed < 0 else seed,
+                                      self.param('iterations'), self.param('population'),
+                                      self.param('world_states'))
             self.search = Search(self.task)
             self.told = 0
         self.run_id = (self.param('run_id')
@@ -108,14 +110,6 @@ class OptimizerNode(Node):
 
     def param(self, name):
         return self.get_parameter(name).value
-
-    def load_run_task(self):
-        task_file = self.param('task_file')
-        task = load_task(task_file)
-        seed = self.param('seed')
-        return run_task(task.source_text, task_file, task.seed if seed < 0 else seed,
-                        self.param('iterations'), self.param('population'),
-                        self.param('world_states'))
 
     def publish(self, topic, message):
         self.publishers_[topic].publish(message)

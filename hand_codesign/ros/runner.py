@@ -21,8 +21,7 @@ import sys
 import threading
 import time
 
-from hand_codesign.core.runs import run_task
-from hand_codesign.core.task import load_task
+from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 
@@ -93,10 +92,8 @@ def check_arguments(arguments):
             raise UserError(f'--{flag.replace("_", "-")}: expected a positive number, '
                             f'got {value}')
     try:
-        task = load_task(arguments.task)
-        return run_task(task.source_text, arguments.task,
-                        task.seed if arguments.seed is None else arguments.seed,
-                        arguments.iterations, arguments.popsize, arguments.world_states)
+        return load_run_task(arguments.task, arguments.seed, arguments.iterations,
+                             arguments.popsize, arguments.world_states)
     except TaskError as error:
         raise UserError(str(error))
 
