@@ -5,7 +5,8 @@ import pathlib
 
 from hand_codesign.core import load_task, parse_task
 from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
-                                           orientation_angle, position_distance, slerp,
+                                           orientation_angle, position_distance,
+                                           quaternion_multiply, slerp,
                                            torque_penalty, weighted_fitness)
 from hand_codesign.core.task import axis_angle_quaternion
 from hand_codesign.core.worlds import object_state, WorldState
@@ -213,6 +214,30 @@ def test_goals_relative_to_the_start_move_with_each_world():
         (0.1, 0.5))
     absolute = goal_schedule(load_task(TASKS / 'task5.yaml'))
     assert absolute.pose_errors((0.01, 0.0, 0.02), IDENTITY, start) == (0.0, 0.0)
+
+
+def test_relative_goals_ask_for_the_same_world_turn_whatever_the_start_axis():
+    """A start turned about x with a goal about z: the world's goal is R * q_start."""
+    document = yaml.safe_load(small_task(
+        [{'time': 1.0, 'position': [0.0, 0.0, 0.02], 'trajectory': False}],
+        [{'time': 1.0, 'orientation': {'axis': [0, 0, 1], 'angle': 0.9}, 'trajectory': False}],
+        relative=True).source_text)
+    document['randomization']['orientation'] = {'axis': [1, 0, 0], 'range': [-1.5, 1.5]}
+    task = parse_task(yaml.safe_dump(document), source='x_axis.yaml')
+    schedule = goal_schedule(task)
+    turn = about(Z, 0.9)  # the world-frame turn the goal asks for
+    for delta in (-1.5, -0.4, 0.0, 0.7, 1.5):
+        start = object_state(task, WorldState((0.01, 0.0, 0.0), delta, 0.0, 1.0, 1.0))
+        perfect = quaternion_multiply(turn, start.orientation)
+        position, orientation = schedule.world_goal(
+            task.goals.position[-1].position, task.goals.orientation[-1].orientation, start)
+        assert orientation_angle(orientation, perfect) == pytest.approx(0.0, abs=1e-7)
+        assert list(position) == pytest.approx(list(start.position))  # goal = nominal start
+        trace = schedule.new_trace(start)
+        trace.record(position, perfect)
+        assert trace.objective_values() == pytest.approx([0.0, 0.0], abs=1e-7)
+        assert schedule.pose_errors(start.position, start.orientation, start) == \
+            pytest.approx((0.0, 0.9))
 
 
 def test_presets_build_schedules():

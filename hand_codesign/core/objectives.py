@@ -27,11 +27,17 @@ step and calls `Trace.record` there, so nothing is allocated per physics step::
 
 Steps count from 1: the state after step s is the state at time s * time_step.
 
-Goals relative to the start (goals.relative_to_start): the schedule holds the goals of the
-nominal start; `new_trace(start)` and `pose_errors(..., start)` take the world's ObjectState
-and map every measured pose back into the nominal start's frame (position minus the world's
-start offset, orientation turned back by the world's start turn), which scores it exactly as
-against goals moved with the world's start. Without that option `start` is ignored.
+Goals relative to the start (goals.relative_to_start): each world's goal is the nominal goal
+carried along by that world's start, so every goal asks for the same world-frame motion from
+the start in every world: positions shifted by the start's displacement, orientations
+q_goal * q_nominal^-1 * q_start (the same world-frame turn R = q_goal * q_nominal^-1, applied
+to the world's own start). The schedule holds the goals of the nominal start; `new_trace(start)`
+and `pose_errors(..., start)` take the world's ObjectState and map every measured pose into the
+nominal start's frame instead (position minus the offset, orientation q * q_start^-1 * q_nominal):
+a rotation angle between two quaternions is unchanged when both are multiplied on the right by
+the same unit quaternion, so that scores exactly as against the world's own goals, which
+`world_goal(..., start)` returns for display (`hand-codesign check`). Without the option
+`start` is ignored.
 
 Early termination (eq. 6): with `early_termination` set, at every multiple of
 1 / checks_per_second (10 per simulated second) the goal samples of that step are compared with
@@ -255,17 +261,35 @@ class GoalSchedule:
 
     def start_transform(self, start):
         """
-        Return (offset, turn back) mapping a world's poses to the nominal start, or None.
+        Return (offset, turn) mapping a world's poses to the nominal start, or None.
 
-        None when goals are absolute or no start is given.
+        A measured pose (p, q) of the world maps to (p - offset, q * turn). None when goals
+        are absolute or no start is given.
         """
         if not self.relative_to_start or start is None:
             return None
         offset = np.asarray(start.position, dtype=float) - self.start_position
-        # the world's start is turn * nominal, so turn^-1 = nominal * start^-1
-        turn_back = quaternion_multiply(self.start_orientation,
-                                        quaternion_conjugate(start.orientation))
-        return offset, turn_back
+        turn = quaternion_multiply(quaternion_conjugate(start.orientation),
+                                   self.start_orientation)
+        return offset, turn
+
+    def world_goal(self, position, orientation, start=None):
+        """
+        Return a nominal goal (position or None, orientation or None) in the world of `start`.
+
+        The inverse of the mapping of `start_transform`: p + offset, q * turn^-1, which is
+        q_goal * q_nominal^-1 * q_start.
+        """
+        transform = self.start_transform(start)
+        if transform is None:
+            return position, orientation
+        offset, turn = transform
+        if position is not None:
+            position = np.asarray(position, dtype=float) + offset
+        if orientation is not None:
+            orientation = np.asarray(quaternion_multiply(orientation,
+                                                         quaternion_conjugate(turn)))
+        return position, orientation
 
     def next_check_step(self, count):
         """Return the step of check number `count`, or -1 after the last check."""
@@ -391,9 +415,9 @@ def quaternion_conjugate(quaternion):
 
 
 def _to_nominal(transform, position, orientation):
-    offset, turn_back = transform
+    offset, turn = transform
     return (np.asarray(position, dtype=float) - offset,
-            quaternion_multiply(turn_back, orientation))
+            quaternion_multiply(orientation, turn))
 
 
 _SCHEDULES = {}
