@@ -84,10 +84,11 @@ def header(summary):
                       f'step size {budget["initial_sigma"]:g} (normalized genome)'))
     if summary['hierarchy']:
         check = budget['structures'][0]['check_world_states']
+        shared = min(check, budget['world_states'])
         lines.append(wrap('hierarchy: ' + ' -> '.join(str(s) for s in summary['hierarchy'])
                           + ' (each structure runs the whole budget, then its best design is '
-                          f'checked on {check} world states: the training worlds and more '
-                          'of the same seed)'))
+                          f'checked on {check} world states drawn with the same seed; the '
+                          f'first {shared} of them are training worlds)'))
     else:
         lines.append(f'hand structure: {summary["structure"]} (fixed)')
     return '\n'.join(lines)

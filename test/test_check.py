@@ -114,12 +114,19 @@ def test_hierarchy_lists_its_structures_and_their_budget(capsys):
     # 200 iterations x 150 candidates x 64 worlds, plus the check on 128 worlds, of 200 steps
     assert budget['physics_steps'] == 6 * (200 * 150 * 64 + 128) * 200
     assert any('hierarchy stops' in reason for reason in budget['may_end_early'])
+    assert main(['check', str(TASKS / 'task4.yaml')]) == 0
+    text = ' '.join(capsys.readouterr().out.split())  # unwrapped
+    assert 'hierarchy: [1] -> [2] -> [1, 1] -> [1, 2] -> [2, 2] -> [2, 3]' in text
+    assert '2,304,153,600 steps' in text
+    # "the first 64 of them are training worlds": the check's worlds begin with them
+    assert 'the first 64 of them are training worlds' in text
+    assert world_states(task.replace(num_world_states=128))[:64] == world_states(task)
 
 
 def test_overrides_and_early_termination_are_shown(capsys):
     assert main(['check', str(TASKS / 'task3.yaml'), '--seed', '4', '--iterations', '3',
                  '--popsize', '6', '--world-states', '2']) == 0
-    text = capsys.readouterr().out
+    text = ' '.join(capsys.readouterr().out.split())  # unwrapped
     assert 'budget: mocma, 3 iterations x 6 candidates, 2 world states, seed 4' in text
     assert 'early termination can shorten a rollout' in text
     assert '3 x 6 x 800 per structure): 14,400 steps' in text
