@@ -13,6 +13,8 @@ from hand_codesign.errors import UserError
 
 # verb -> (module, function, one-line help); the function takes the parsed arguments.
 VERBS = {
+    'check': ('hand_codesign.check', 'check_command',
+              'validate a task file and show what a run of it would do, without simulating'),
     'run': ('hand_codesign.ros.runner', 'run_command',
             'run a co-design as ROS 2 processes and record it to a bag'),
     'analyze': ('hand_codesign.analysis.report', 'analyze_command',
@@ -23,8 +25,6 @@ VERBS = {
                    'evaluate the best design of a bag on many world states'),
     'export': ('hand_codesign.analysis.export', 'export_command',
                'write the best design of a bag as URDF and its controller as YAML'),
-    'check': ('hand_codesign.check', 'check_command',
-              'validate a task file and show what a run of it would do, without simulating'),
 }
 
 
