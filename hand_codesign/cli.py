@@ -1,5 +1,5 @@
 """
-The `hand-codesign` command: run a co-design, then analyse, replay and export it from its bag.
+The `hand-codesign` command: check a task, run a co-design, then analyse, replay and export it.
 
 Each verb lives in its own module and is imported only when used, so that `hand-codesign
 analyze` works on a machine without a ROS installation and `--help` answers at once.
@@ -13,6 +13,8 @@ from hand_codesign.errors import UserError
 
 # verb -> (module, function, one-line help); the function takes the parsed arguments.
 VERBS = {
+    'check': ('hand_codesign.check', 'check_command',
+              'validate a task file and show what a run of it would do, without simulating'),
     'run': ('hand_codesign.ros.runner', 'run_command',
             'run a co-design as ROS 2 processes and record it to a bag'),
     'analyze': ('hand_codesign.analysis.report', 'analyze_command',
@@ -40,6 +42,16 @@ def add_run_arguments(parser):
     parser.add_argument('--domain-id', type=int,
                         help='ROS_DOMAIN_ID of the run (default: a free one of this host)')
     parser.add_argument('--quiet', action='store_true', help='print only the final summary')
+
+
+def add_check_arguments(parser):
+    parser.add_argument('task', help='task file (YAML), e.g. config/tasks/task5.yaml')
+    parser.add_argument('--json', action='store_true',
+                        help='print one JSON object (floats exact) instead of the text')
+    parser.add_argument('--seed', type=int, help="run seed (default: the task file's)")
+    parser.add_argument('--iterations', type=int, help='generations per structure')
+    parser.add_argument('--popsize', type=int, help='candidates per generation')
+    parser.add_argument('--world-states', type=int, help='randomized worlds per candidate')
 
 
 def add_bag_arguments(verb, parser):
@@ -72,6 +84,8 @@ def build_parser():
         verb_parser = verbs.add_parser(verb, help=help_text, description=help_text)
         if verb == 'run':
             add_run_arguments(verb_parser)
+        elif verb == 'check':
+            add_check_arguments(verb_parser)
         else:
             add_bag_arguments(verb, verb_parser)
     return parser

@@ -3,13 +3,17 @@
 import csv
 import pathlib
 
-from hand_codesign.core import grid_world_states, load_task, WorldState
+from hand_codesign.core import grid_world_states, load_task, world_states, WorldState
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.objectives import orientation_angle, position_distance
 from hand_codesign.core.robustness import evaluate_robustness
+from hand_codesign.core.worlds import object_state
 import numpy as np
+import pytest
 
 TASK5 = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'tasks' / 'task5.yaml'
+TASK3 = TASK5.with_name('task3.yaml')
 
 
 def test_paper_grid_has_5_values_on_each_of_6_quantities():
@@ -56,3 +60,36 @@ def test_worlds_in_collision_are_found_one_by_one():
     alone = evaluate(x, task, worlds=[nominal, shifted])
     assert np.array_equal(report.final_errors[[0, 2]], alone.final_errors)
     assert np.array_equal(report.final_errors[1], report.initial_errors[1])
+    assert np.array_equal(report.final_poses[1], report.start_poses[1])  # not simulated
+
+
+def test_worlds_csv_recomputes_the_errors_from_its_poses(tmp_path):
+    """The start, goal and final poses in worlds.csv give its errors with eq. 3 and 4."""
+    task = load_task(TASK3)  # goals relative to each world's start: every world's goal differs
+    x = genome_spec(task).initial_mean()
+    worlds = world_states(task, 3)
+    report = evaluate_robustness(x, task, worlds=worlds)
+    direct = evaluate(x, task, worlds=worlds)
+    assert np.array_equal(report.final_poses, direct.final_poses)
+    report.write_csv(tmp_path / 'worlds.csv')
+    with open(tmp_path / 'worlds.csv', newline='', encoding='utf-8') as stream:
+        rows = list(csv.DictReader(stream))
+    assert len(rows) == 3
+
+    def pose(row, when):
+        return (np.array([float(row[f'{when}_position_{axis}']) for axis in 'xyz']),
+                np.array([float(row[f'{when}_orientation_{axis}']) for axis in 'xyzw']))
+
+    for row, world in zip(rows, worlds):
+        start, goal, final = pose(row, 'start'), pose(row, 'goal'), pose(row, 'final')
+        state = object_state(task, world)
+        assert start[0].tolist() == list(state.position)
+        assert start[1].tolist() == list(state.orientation)
+        for when, (position, orientation) in (('initial', start), ('final', final)):
+            assert float(row[f'{when}_position_error']) == pytest.approx(
+                position_distance(position, goal[0], task.goals.distance), abs=1e-12)
+            assert float(row[f'{when}_orientation_error']) == pytest.approx(
+                orientation_angle(orientation, goal[1]), abs=1e-6)
+        assert not np.allclose(final[0], start[0])  # the object moved
+    goals = [pose(row, 'goal')[0] for row in rows]
+    assert not np.allclose(goals[0], goals[1])  # each world's goal moved with its start

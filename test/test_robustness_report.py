@@ -44,6 +44,9 @@ def test_grid_of_the_best_design_on_two_processes(real_run, tmp_path, capsys):
     alone = evaluate(best.x, task, worlds=[grid[5]])
     assert float(worlds[5]['final_position_error']) == alone.final_errors[0, 0]
     assert worlds[5]['collision'] == str(int(alone.collision))
+    final = [float(worlds[5][f'final_position_{axis}']) for axis in 'xyz'] + \
+        [float(worlds[5][f'final_orientation_{axis}']) for axis in 'xyzw']
+    assert final == alone.final_poses[0].tolist()
 
 
 def test_a_count_that_is_no_grid_draws_seeded_worlds(real_run, tmp_path, capsys):

@@ -5,8 +5,11 @@ Evaluates the run's best design on many world states with `core.robustness` on P
 (default: every core) and writes into DIR (default `<bag>_robustness` next to the bag):
 
 - `worlds.csv`: one row per world: its randomized values, the object's position (m) and
-  orientation (rad) error with respect to the last goal at the start and at the end, and
-  whether the design started in collision there;
+  orientation (rad) error with respect to the last goal at the start and at the end,
+  whether the design started in collision there, and the poses the errors come from, in world
+  coordinates: the object's start (`start_position_x` .. `start_orientation_w`), the last goal
+  of that world (`goal_...`) and the object's final pose (`final_position_x`, `_y`, `_z` in m,
+  `final_orientation_x` .. `_w` a quaternion);
 - `percentiles.csv` and the printed table: percentiles of the four errors;
 - `robustness.png`: the paper's Fig. 3 for this design: the distribution of the initial and
   the final errors, as a scatter of position against orientation error and as box plots.

@@ -41,6 +41,10 @@ class Evaluation:
     simulated_time: float  # s, summed over the worlds
     initial_errors: np.ndarray  # (worlds, 2): position, orientation error w.r.t. the last
     final_errors: np.ndarray  # goal at t = 0 and at the end of the rollout
+    # (worlds, 7): the object's pose at the end of each rollout, world frame: position (m),
+    # then quaternion x, y, z, w; the start pose where nothing was simulated (a collision),
+    # the last finite pose of an unstable world. final_errors are measured from it.
+    final_poses: np.ndarray
 
 
 _SIMULATOR = None
@@ -127,10 +131,13 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     num_objectives = schedule.num_objectives
     if simulator.start_collisions(objects):
         world_values = np.full((len(states), num_objectives), COLLISION_PENALTY)
+        starts = np.array([(*state.position, *state.orientation) for state in states],
+                          dtype=float).reshape(len(states), 7)
         return _evaluation(task, combine_worlds(world_values, collision=True), world_values,
-                           True, 0, 0.0, initial.copy(), initial.copy())
+                           True, 0, 0.0, initial.copy(), initial.copy(), starts)
     world_values = np.empty((len(states), num_objectives))
     final = np.empty((len(states), 2))
+    final_poses = np.empty((len(states), 7))
     unstable_worlds, steps = 0, 0
     for index, (state, shape) in enumerate(objects):
         if on_world is not None:
@@ -144,17 +151,18 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
             world_values[index] = result.trace.objective_values()
         final[index] = schedule.pose_errors(result.final_position, result.final_orientation,
                                             state)
+        final_poses[index] = (*result.final_position, *result.final_orientation)
     objectives = combine_worlds(world_values, penalty)
     return _evaluation(task, objectives, world_values, False, unstable_worlds,
-                       steps * task.time_step, initial.copy(), final)
+                       steps * task.time_step, initial.copy(), final, final_poses)
 
 
 def _evaluation(task, objectives, world_values, collision, unstable_worlds, simulated_time,
-                initial, final):
+                initial, final, final_poses):
     return Evaluation(objectives=np.asarray(objectives, dtype=float),
                       objective_names=tuple(task.objective_names),
                       fitness=weighted_fitness(objectives, task.objective_weights),
                       world_objectives=world_values, collision=bool(collision),
                       unstable_worlds=int(unstable_worlds),
                       simulated_time=float(simulated_time), initial_errors=initial,
-                      final_errors=final)
+                      final_errors=final, final_poses=final_poses)

@@ -14,6 +14,10 @@ Worlds are evaluated in chunks with core.evaluate, optionally by a pool of proce
 are the same in any process and with any chunking. A chunk in which the design starts in
 collision is evaluated again world by world, so that `collisions` names the very worlds (a
 colliding world is not simulated: its final errors are its initial errors).
+
+The report also keeps, per world and in the world frame, the object's start pose, the last goal
+(moved with the start when the task's goals are relative to it) and the object's final pose, so
+that `worlds.csv` lets anyone recompute the errors (eq. 3 and 4) without this code.
 """
 
 import concurrent.futures
@@ -23,20 +27,27 @@ import multiprocessing
 from typing import Optional, Sequence
 
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.worlds import grid_world_states, QUANTITIES
+from hand_codesign.core.objectives import goal_schedule
+from hand_codesign.core.worlds import grid_world_states, object_state, QUANTITIES
 import numpy as np
 
 DEFAULT_CHUNK = 125
+POSE_AXES = ('position_x', 'position_y', 'position_z',
+             'orientation_x', 'orientation_y', 'orientation_z', 'orientation_w')
 
 
 @dataclasses.dataclass(frozen=True)
 class RobustnessReport:
-    """Per world: its randomized values, initial and final errors, whether it collided."""
+    """Per world: its values, start, goal and final poses, the errors, whether it collided."""
 
     worlds: tuple  # WorldState per sample
     initial_errors: np.ndarray  # (worlds, 2): position (m), orientation (rad) at t = 0
     final_errors: np.ndarray  # (worlds, 2): the same at the end of the rollout
     collisions: np.ndarray  # (worlds,) bool: the design starts in collision in that world
+    # (worlds, 7) each, world frame: position (m), then quaternion x, y, z, w
+    start_poses: np.ndarray  # the object at t = 0
+    goal_poses: np.ndarray  # the last goals the errors are measured from
+    final_poses: np.ndarray  # the object at the end of the rollout (the start if collided)
 
     @property
     def size(self):
@@ -63,15 +74,24 @@ class RobustnessReport:
         return statistics
 
     def write_csv(self, path):
-        """Write one row per world: its values, the four errors and the collision flag."""
+        """
+        Write one row per world: its values, the four errors, the collision flag and poses.
+
+        The poses (start_*, goal_*, final_*, each position_x..z in m and orientation_x..w)
+        come last, so that the older columns keep their places.
+        """
+        pose_columns = [f'{when}_{axis}' for when in ('start', 'goal', 'final')
+                        for axis in POSE_AXES]
         with open(path, 'w', newline='', encoding='utf-8') as stream:
             writer = csv.writer(stream)
             writer.writerow(list(QUANTITIES) + [
                 'initial_position_error', 'initial_orientation_error',
-                'final_position_error', 'final_orientation_error', 'collision'])
-            for world, initial, final, collision in zip(
-                    self.worlds, self.initial_errors, self.final_errors, self.collisions):
-                writer.writerow([*world_values(world), *initial, *final, int(collision)])
+                'final_position_error', 'final_orientation_error', 'collision'] + pose_columns)
+            for index, world in enumerate(self.worlds):
+                writer.writerow([*world_values(world), *self.initial_errors[index],
+                                 *self.final_errors[index], int(self.collisions[index]),
+                                 *self.start_poses[index], *self.goal_poses[index],
+                                 *self.final_poses[index]])
 
 
 def world_values(world):
@@ -106,8 +126,24 @@ def evaluate_robustness(x, task, worlds: Optional[Sequence] = None, values_per_q
         with concurrent.futures.ProcessPoolExecutor(min(processes, len(jobs)),
                                                     mp_context=spawn) as pool:
             parts = list(pool.map(_evaluate_chunk, jobs))
-    initial, final, collisions = (np.concatenate(column) for column in zip(*parts))
-    return RobustnessReport(worlds, initial, final, collisions)
+    initial, final, collisions, final_poses = (np.concatenate(column)
+                                               for column in zip(*parts))
+    starts, goals = start_and_goal_poses(task, worlds)
+    return RobustnessReport(worlds, initial, final, collisions, starts, goals, final_poses)
+
+
+def start_and_goal_poses(task, worlds):
+    """Return (start poses, last goal poses) of the worlds, (worlds, 7) each, world frame."""
+    schedule = goal_schedule(task)
+    starts, goals = [], []
+    for world in worlds:
+        state = object_state(task, world)
+        position, orientation = schedule.world_goal(schedule.last_position,
+                                                    schedule.last_orientation, state)
+        starts.append((*state.position, *state.orientation))
+        goals.append((*position, *orientation))
+    return (np.array(starts, dtype=float).reshape(-1, 7),
+            np.array(goals, dtype=float).reshape(-1, 7))
 
 
 def _evaluate_chunk(job):
@@ -115,10 +151,10 @@ def _evaluate_chunk(job):
     evaluation = evaluate(x, task, worlds=list(worlds))
     if not evaluation.collision or len(worlds) == 1:
         return (evaluation.initial_errors, evaluation.final_errors,
-                np.full(len(worlds), evaluation.collision))
+                np.full(len(worlds), evaluation.collision), evaluation.final_poses)
     # A collision in one world marks the whole chunk; find the worlds that collide.
     parts = [_evaluate_chunk((x, task, (world,))) for world in worlds]
     return tuple(np.concatenate(column) for column in zip(*parts))
 
 
-__all__ = ['evaluate_robustness', 'RobustnessReport', 'world_values']
+__all__ = ['evaluate_robustness', 'RobustnessReport', 'start_and_goal_poses', 'world_values']

@@ -408,6 +408,9 @@ def load_task(path):
             text = stream.read()
     except OSError as error:
         raise TaskError(f'{path}: cannot read the task file ({error.strerror})') from None
+    except UnicodeDecodeError as error:
+        raise TaskError(f'{path}: expected a task file in UTF-8 text, got byte '
+                        f'0x{error.object[error.start]:02x} at offset {error.start}') from None
     return parse_task(text, source=str(path))
 
 
@@ -416,7 +419,7 @@ def parse_task(text, source='<task>'):
     try:
         document = yaml.safe_load(text)
     except yaml.YAMLError as error:
-        raise TaskError(f'{source}: not valid YAML: {error}') from None
+        raise TaskError(f'{source}: not valid YAML: {_yaml_problem(error)}') from None
     reader = _Reader(source)
     task = reader.task(document)
     task = dataclasses.replace(task, source=source, source_text=text)
@@ -933,6 +936,15 @@ class _Reader:
                 self.fail(_join(key, name), 'no gains for a torque controller', got=False)
         return ControllerDesign(kind=kind, values=values, kp=gains.get('kp'),
                                 kd=gains.get('kd'))
+
+
+def _yaml_problem(error):
+    """Return a YAML error as one line: what is wrong and where (PyYAML spreads it out)."""
+    mark = getattr(error, 'problem_mark', None)
+    problem = getattr(error, 'problem', None)
+    if problem is None or mark is None:
+        return ' '.join(str(error).split())
+    return f'{problem} at line {mark.line + 1}, column {mark.column + 1}'
 
 
 def _join(prefix, name):
