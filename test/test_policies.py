@@ -1,5 +1,7 @@
 """Policies: torque schedules, gravity compensation and the feed-forward PD law of eq. (1)."""
 
+import math
+
 from hand_codesign.core.design import ControllerDesign, FingerDesign, HandDesign, JointDesign
 from hand_codesign.core.hand import build_hand, hand_model
 from hand_codesign.core.policies import make_policy, PDPolicy, TorquePolicy
@@ -16,20 +18,39 @@ HAND = HandSpec(base_position=(0.0, 0.0, 0.5), base_orientation=(0.0, 0.0, 0.0, 
                 palm_size=(0.06, 0.01, 0.06), segment_radius=0.007, segment_density=1000.0)
 
 
+# Base orientations of the presets: palm up (Tasks 1 to 3: the fingers point up) and palm down
+# (Tasks 4 to 6: they hang), and one turned about every axis.
+PALM_UP = (math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))
+PALM_DOWN = (-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))
+TILTED = tuple(pybullet.getQuaternionFromEuler((0.4, -0.7, 1.1)))
+
+
+def build_finger(client, hand=HAND, lengths=(0.06, 0.05), base_orientation=None):
+    """Build a free two-joint finger without ground; return (body, model)."""
+    joints = (JointDesign(axis_angle=0.0, initial_angle=0.2),
+              JointDesign(axis_angle=0.0, initial_angle=-0.1))
+    design = HandDesign(fingers=(FingerDesign(position=(0.0, 0.0), segment_lengths=lengths,
+                                              joints=joints),), friction=0.5)
+    model = hand_model(design, hand)
+    orientation = hand.base_orientation if base_orientation is None else base_orientation
+    return build_hand(client, model, hand.base_position, orientation), model
+
+
 @pytest.fixture
-def finger():
-    """Return (client, body, model) of a free two-joint finger without ground."""
+def client():
+    """Return a DIRECT client with gravity and the task's time step."""
     client = BulletClient(connection_mode=pybullet.DIRECT)
     client.setGravity(0.0, 0.0, -9.81)
     client.setPhysicsEngineParameter(fixedTimeStep=TIME_STEP)
-    joints = (JointDesign(axis_angle=0.0, initial_angle=0.2),
-              JointDesign(axis_angle=0.0, initial_angle=-0.1))
-    design = HandDesign(fingers=(FingerDesign(position=(0.0, 0.0), segment_lengths=(0.06, 0.05),
-                                              joints=joints),), friction=0.5)
-    model = hand_model(design, HAND)
-    body = build_hand(client, model, HAND.base_position, HAND.base_orientation)
-    yield client, body, model
+    yield client
     client.disconnect()
+
+
+@pytest.fixture
+def finger(client):
+    """Return (client, body, model) of a free two-joint finger without ground."""
+    body, model = build_finger(client)
+    return client, body, model
 
 
 def run(client, body, policy, steps):
@@ -72,6 +93,26 @@ def test_gravity_compensation_holds_a_finger_still(finger):
         client.resetJointState(body, index, angle, 0.0)
     dropped = run(client, body, TorquePolicy(zero, 1.0, 'constant', False, TIME_STEP), 200)
     assert np.max(np.abs(dropped - model.initial_angles)) > 0.1
+
+
+@pytest.mark.parametrize('orientation', [PALM_UP, PALM_DOWN, TILTED],
+                         ids=['palm up', 'palm down', 'tilted'])
+def test_gravity_compensation_holds_a_turned_hand_still(client, orientation):
+    body, model = build_finger(client, base_orientation=orientation)
+    zero = np.zeros((2, model.num_joints))
+    held = run(client, body, TorquePolicy(zero, 1.0, 'constant', True, TIME_STEP), 200)
+    np.testing.assert_allclose(held, model.initial_angles, atol=1e-4)
+    # the world's gravity is back after every call: an uncompensated finger falls
+    assert client.getPhysicsEngineParameters()['gravityAccelerationZ'] == -9.81
+    dropped = run(client, body, TorquePolicy(zero, 1.0, 'constant', False, TIME_STEP), 200)
+    assert np.max(np.abs(dropped - model.initial_angles)) > 0.1
+    for index, angle in enumerate(model.initial_angles):
+        client.resetJointState(body, index, angle, 0.0)
+    # a PD holding the initial angles needs no correction either
+    policy = PDPolicy(targets=[model.initial_angles], keyframe_times=[1.0], kp=[1.0, 1.0],
+                      kd=[1.0, 1.0], initial_angles=model.initial_angles, time_step=TIME_STEP)
+    np.testing.assert_allclose(run(client, body, policy, 200), model.initial_angles,
+                               atol=1e-4)
 
 
 def test_pd_drives_the_joints_to_their_targets(finger):

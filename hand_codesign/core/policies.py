@@ -12,6 +12,13 @@ duration). After D the policy torque is zero. With gravity compensation the torq
 hold the hand still against gravity, N(theta) = ID(theta, 0, 0) from PyBullet's inverse
 dynamics, are added every step. Its peak |tau| is the tau* of the torque penalty, eq. (2).
 
+Gravity in inverse dynamics: PyBullet's calculateInverseDynamics ignores the pose of a fixed
+base (it puts the base at the world origin, unrotated), so with the world's gravity it
+compensates gravity as if the palm were not turned: every preset turns it (palm up or palm
+down), and a hand of Task 1 then fell over under "compensation". N is therefore computed with
+gravity turned into the base frame, set for that one call and set back before the step
+(`GravityCompensation`); M and C do not depend on the base's orientation.
+
 PDPolicy, equation (1) with the gains multiplied by M(theta) as the paper does:
     tau = M(theta) (thetadd_d - Kv edot - Kp e) + C(theta, thetad) thetad_d + N(theta),
     e = theta - theta_d,  edot = thetad - thetad_d.
@@ -22,8 +29,8 @@ M(q) a + C(q, v) v + N(q) alone. The Coriolis term C(q, v) v is a symmetric bili
 B(v, v) (Christoffel symbols are symmetric in their last two indices), so polarization gives
     M a + C(theta, thetad) thetad_d = [ID(theta, thetad + thetad_d, 2a)
                                        - ID(theta, thetad - thetad_d, -2a)] / 4
-exactly, and N(theta) = ID(theta, 0, 0) is added when gravity compensation is on (the
-default for PD). Three inverse-dynamics calls per step, no mass matrix inversion.
+exactly, and N(theta) (above) is added when gravity compensation is on (the default for
+PD). Three inverse-dynamics calls per step, no mass matrix inversion.
 """
 
 import numpy as np
@@ -42,6 +49,28 @@ def torque_knot_times(mode, knots, duration):
 
 def _joint_angles(client, body, joint_indices):
     return [state[0] for state in client.getJointStates(body, joint_indices)]
+
+
+class GravityCompensation:
+    """N(theta): the joint torques that hold a fixed-base body still against gravity."""
+
+    def __init__(self, client, body, num_joints):
+        parameters = client.getPhysicsEngineParameters()
+        self.world_gravity = [parameters[f'gravityAcceleration{axis}'] for axis in 'XYZ']
+        _, orientation = client.getBasePositionAndOrientation(body)
+        rotation = np.array(client.getMatrixFromQuaternion(orientation)).reshape(3, 3)
+        self.base_gravity = (rotation.T @ np.array(self.world_gravity)).tolist()
+        self.client, self.body = client, body
+        self.zeros = [0.0] * num_joints
+
+    def __call__(self, angles):
+        """Return N(angles) (see the module doc: gravity in the base frame for the call)."""
+        client = self.client
+        client.setGravity(*self.base_gravity)
+        try:
+            return client.calculateInverseDynamics(self.body, angles, self.zeros, self.zeros)
+        finally:
+            client.setGravity(*self.world_gravity)
 
 
 def _joint_states(client, body, joint_indices):
@@ -97,12 +126,11 @@ class TorquePolicy:
         if not self.gravity_compensation:
             return rows.__getitem__
         joints = list(range(self.num_joints))
-        zeros = [0.0] * self.num_joints
-        angles, inverse_dynamics = _joint_angles, client.calculateInverseDynamics
+        angles, gravity = _joint_angles, GravityCompensation(client, body, self.num_joints)
 
         def torques(step):
-            gravity = inverse_dynamics(body, angles(client, body, joints), zeros, zeros)
-            return [tau + hold for tau, hold in zip(rows[step], gravity)]
+            hold = gravity(angles(client, body, joints))
+            return [tau + n for tau, n in zip(rows[step], hold)]
         return torques
 
 
@@ -161,10 +189,10 @@ class PDPolicy:
         """Return torques(step) -> list of joint torques for one rollout of `body`."""
         target_rows, velocity_rows = self.track(num_steps)
         joints = list(range(self.num_joints))
-        zeros = [0.0] * self.num_joints
         gains = list(zip(self.kp.tolist(), self.kd.tolist()))
         states, inverse_dynamics = _joint_states, client.calculateInverseDynamics
-        compensate = self.gravity_compensation
+        gravity = (GravityCompensation(client, body, self.num_joints)
+                   if self.gravity_compensation else None)
 
         def torques(step):
             angles, velocities = states(client, body, joints)
@@ -179,8 +207,8 @@ class PDPolicy:
                                      [v - vd for v, vd in zip(velocities, target_velocities)],
                                      [-a for a in twice_a])
             tau = [(p - m) * 0.25 for p, m in zip(plus, minus)]
-            if compensate:
-                tau = [t + n for t, n in zip(tau, inverse_dynamics(body, angles, zeros, zeros))]
+            if gravity is not None:
+                tau = [t + n for t, n in zip(tau, gravity(angles))]
             return tau
         return torques
 
