@@ -1,5 +1,6 @@
 """Policies: torque schedules, gravity compensation and the feed-forward PD law of eq. (1)."""
 
+import dataclasses
 import math
 
 from hand_codesign.core.design import ControllerDesign, FingerDesign, HandDesign, JointDesign
@@ -127,19 +128,26 @@ def test_pd_drives_the_joints_to_their_targets(finger):
     assert policy.peak_torque == 0.0
 
 
-def test_pd_torque_is_equation_one(finger):
-    """Check tau = M(q)(-Kv edot - Kp e) + C(q, qd) qd_d + N(q) with PyBullet's M(q)."""
+@pytest.mark.parametrize('stable', [False, True], ids=['explicit', 'stable'])
+def test_pd_torque_is_equation_one(finger, stable):
+    """
+    Check tau = M(q) a + C(q, qd) qd_d + N(q) with PyBullet's M(q).
+
+    Explicit: a = -Kv edot - Kp e; stable: a = -(Kv edot + Kp (e + h edot)) / (1 + h Kv).
+    """
     client, body, model = finger
     kp, kd = np.array([30.0, 50.0]), np.array([4.0, 7.0])
     policy = PDPolicy(targets=[[0.6, 0.3]], keyframe_times=[1.0], kp=kp, kd=kd,
-                      initial_angles=model.initial_angles, time_step=TIME_STEP)
+                      initial_angles=model.initial_angles, time_step=TIME_STEP, stable=stable)
     torques = policy.start(client, body, 400)
     targets, target_velocities = policy.target_at([0.5])
     angles = np.array([0.45, -0.2])
+    h = TIME_STEP if stable else 0.0
 
     def expected(velocities, coriolis_velocities):
         mass = np.array(client.calculateMassMatrix(body, angles.tolist()))
-        acceleration = -kd * (velocities - target_velocities[0]) - kp * (angles - targets[0])
+        error, error_rate = angles - targets[0], velocities - target_velocities[0]
+        acceleration = -(kd * error_rate + kp * (error + h * error_rate)) / (1.0 + h * kd)
         # C(q, v) v + N(q) from inverse dynamics at zero acceleration
         bias = client.calculateInverseDynamics(body, angles.tolist(),
                                                coriolis_velocities.tolist(), [0.0, 0.0])
@@ -178,3 +186,41 @@ def test_make_policy_follows_the_task_policy():
     pd = ControllerDesign(kind='pd', values=np.zeros((1, 2)), kp=np.ones(2), kd=np.ones(2))
     with pytest.raises(ValueError, match="controller kind 'pd' for a 'torque' policy"):
         make_policy(spec, pd, (0.0, 0.0), TIME_STEP)
+
+
+# A finger of Tasks 1 and 2: 35 cm segments of 14 cm diameter, about 0.5 kg each.
+LARGE_HAND = dataclasses.replace(HAND, base_position=(0.0, 0.0, 1.0), palm_size=(0.6, 0.1, 0.6),
+                                 segment_radius=0.07, segment_density=100.0)
+
+
+@pytest.mark.parametrize('kp', [1000.0, 5000.0])
+def test_pd_at_table_one_highest_damping_tracks_where_explicit_saturates(client, kp):
+    """Kv = 625 at dt = 0.005: explicit eq. (1) sits at Bullet's 100 rad/s cap, stable tracks."""
+    body, model = build_finger(client, LARGE_HAND, (0.35, 0.35), PALM_UP)
+    kd = 625.0
+    targets = [[0.5, -0.3]]
+    results = {}
+    for stable in (False, True):
+        for index, angle in enumerate(model.initial_angles):
+            client.resetJointState(body, index, angle, 0.0)
+        policy = PDPolicy(targets=targets, keyframe_times=[0.5], kp=[kp, kp], kd=[kd, kd],
+                          initial_angles=model.initial_angles, time_step=TIME_STEP,
+                          stable=stable)
+        torques = policy.start(client, body, 200)
+        errors, speeds = [], []
+        for step in range(200):
+            client.setJointMotorControlArray(body, [0, 1], client.TORQUE_CONTROL,
+                                             forces=torques(step))
+            client.stepSimulation()
+            states = client.getJointStates(body, [0, 1])
+            target, _ = policy.target_at([(step + 1) * TIME_STEP])
+            errors.append(np.array([state[0] for state in states]) - target[0])
+            speeds.append([state[1] for state in states])
+        results[stable] = np.abs(errors), np.abs(speeds)
+    errors, speeds = results[False]
+    assert np.mean(speeds.max(axis=1) >= 99.0) > 0.9  # at the cap nearly all the time
+    assert errors[-1].max() > 0.1
+    errors, speeds = results[True]
+    assert speeds.max() < 5.0  # the ramp runs at about 1 rad/s
+    assert errors.max() < 0.01  # on the ramp (velocity feed-forward) and after
+    assert errors[-1].max() < 1e-3
