@@ -166,7 +166,12 @@ class TorquePolicy:
 
 
 class PDPolicy:
-    """The feed-forward PD controller of equation (1) tracking keyframed joint targets."""
+    """
+    The feed-forward PD controller of equation (1) tracking keyframed joint targets.
+
+    stable=True (the default) integrates it in the stable form of the module doc;
+    stable=False applies eq. (1) explicitly (unstable for Kv dt + Kp dt^2 / 2 > 2).
+    """
 
     def __init__(self, targets, keyframe_times, kp, kd, initial_angles,
                  gravity_compensation=True, time_step=0.005, stable=True):
