@@ -1,11 +1,13 @@
 """Genome: named genes with the task's bounds, a continuous mapping, and Design round trips."""
 
+import dataclasses
 import math
 import pathlib
 
 from hand_codesign.core import (decode, genome_spec, load_task, objective_names, parse_task,
                                 TaskError)
 from hand_codesign.core.genome import fold, seed_genome
+from hand_codesign.core.optimizers import make_optimizer
 import numpy as np
 import pytest
 
@@ -183,6 +185,47 @@ def test_seeded_search_centres_on_the_seed():
     mean = spec.decode(spec.initial_mean())
     assert mean.hand.friction == pytest.approx(0.9)
     assert mean.controller.kp == pytest.approx(np.full(6, 2550.0))
+
+
+def test_torque_variant_takes_the_hand_from_the_seed_and_the_torques_from_the_centre():
+    """task1_torque.yaml's seed is a PD design: its target angles are no torques."""
+    task = load_task(TASKS / 'task1_torque.yaml')
+    spec = genome_spec(task)
+    x = seed_genome(task)
+    torques = spec.indices('controller.torque.')
+    assert len(torques) == 18 and (x[torques] == 0.5).all()
+    start = spec.decode(x)
+    assert np.abs(start.controller.values).max() == pytest.approx(0.0)  # centre of [-0.5, 0.5]
+    seed = task.seed_design
+    assert_same_design(dataclasses.replace(start, controller=seed.controller), seed)
+    # the morphology starts where the PD variant's does, gene for gene
+    pd_task = load_task(TASKS / 'task1.yaml')
+    pd_spec = genome_spec(pd_task)
+    morphology = [name for name in spec.names if not name.startswith('controller.')]
+    assert morphology == [name for name in pd_spec.names if not name.startswith('controller.')]
+    pd_x = seed_genome(pd_task)
+    assert x[[spec.index(name) for name in morphology]] == pytest.approx(
+        pd_x[[pd_spec.index(name) for name in morphology]], abs=1e-15)
+    assert make_optimizer(task, spec.size).x0 == pytest.approx(x, abs=0.0)
+
+
+def test_seeded_start_centres_the_genes_the_seed_has_no_value_for():
+    # Task 1's seed joints have no limits; searching limits starts them at the centre.
+    text = (TASKS / 'task1.yaml').read_text().replace('joint_limits: none',
+                                                      'joint_limits: {bounds: [-1, 1]}')
+    task = parse_task(text, source='limits.yaml')
+    spec = genome_spec(task)
+    x = spec.seed_mean()
+    limits = [index for index, name in enumerate(spec.names) if name.endswith('_limit')]
+    assert len(limits) == 12 and (x[limits] == 0.5).all()
+    assert np.isnan(spec.seed_values[limits]).all()
+    seeded = np.delete(np.arange(spec.size), limits)
+    assert not np.isnan(spec.seed_values[seeded]).any()
+    start = spec.decode(x)
+    assert start.controller == task.seed_design.controller
+    assert [j.axis_angle for f in start.hand.fingers for j in f.joints] == pytest.approx(
+        [j.axis_angle for f in task.seed_design.hand.fingers for j in f.joints])
+    assert genome_spec(load_task(TASKS / 'task5.yaml')).seed_mean() is None
 
 
 def test_decode_function_and_bad_shapes():

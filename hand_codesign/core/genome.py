@@ -23,6 +23,13 @@ bound moves the physical value back into the range instead of sticking to the bo
 paper maps parameters "to a continuous function in the set range"). Then the physical value
 is lower + y (upper - lower). The centre of the bounds is x = 0.5, where CMA-ES starts.
 
+Seeded start (Tasks 1 and 2): `seed_mean()` takes each gene the task's seed design has from
+the seed and every other gene from the centre of its bounds, as the paper starts CMA-ES. The
+seed has every morphology gene (its structure is the task's), and its controller genes only
+when its controller is of the task's policy kind: task1_torque.yaml seeds the hand from the
+PD seed of Task 1 and starts its torques at the centre, never reading the seed's target
+angles as torques.
+
 Decoding also keeps the Design physical: each joint's two limit genes are sorted into
 lower <= upper, and the initial angle is clipped into the joint's limits.
 """
@@ -70,6 +77,8 @@ class GenomeSpec:
         self.names = names
         self.lower = np.array(lower, dtype=float)
         self.upper = np.array(upper, dtype=float)
+        # the seed design's physical value of each gene (nan: the seed has none)
+        self.seed_values = np.array(self._builder.seed_values, dtype=float)
         self.size = len(names)
         self._index = {name: index for index, name in enumerate(names)}
 
@@ -88,6 +97,19 @@ class GenomeSpec:
     def initial_mean(self):
         """Return the normalized centre of the bounds (all 0.5), where CMA-ES starts."""
         return np.full(self.size, 0.5)
+
+    def seed_mean(self):
+        """
+        Return the normalized start of a seeded search, or None without a seed design.
+
+        A gene the seed has starts at the seed's value (outside [0, 1] if the seed lies
+        outside the gene's bounds; decoding folds it back), every other gene at the centre.
+        """
+        if self._builder.task.seed_design is None:
+            return None
+        seeded = ~np.isnan(self.seed_values)
+        return np.where(seeded, (self.seed_values - self.lower) / (self.upper - self.lower),
+                        0.5)
 
     def to_physical(self, x):
         """Return the physical value of every gene of normalized genome x."""
@@ -159,7 +181,7 @@ class _Builder:
 
     def __init__(self, task):
         self.task = task
-        self.names, self.lower, self.upper = [], [], []
+        self.names, self.lower, self.upper, self.seed_values = [], [], [], []
         seed = task.seed_design
         morphology = task.morphology
         self.friction = self.source('hand.friction', 'morphology.friction',
@@ -213,6 +235,7 @@ class _Builder:
         self.names.append(name)
         self.lower.append(bounds.lower)
         self.upper.append(bounds.upper)
+        self.seed_values.append(float('nan') if seed_value is None else float(seed_value))
         return _Gene(len(self.names) - 1)
 
     def fail(self, key, expected):
@@ -367,7 +390,5 @@ def genome_names(task: Task) -> Tuple[str, ...]:
 
 
 def seed_genome(task: Task) -> Optional[np.ndarray]:
-    """Return the normalized genome of the task's seed design, or None without one."""
-    if task.seed_design is None:
-        return None
-    return genome_spec(task).encode(task.seed_design)
+    """Return where a seeded search of the task starts (GenomeSpec.seed_mean), or None."""
+    return genome_spec(task).seed_mean()
