@@ -19,42 +19,42 @@ def run_python(code):
                                     'dispatch', 'runs', 'summary', 'objectives', 'worlds',
                                     'design', 'policies'])
 def test_modules_that_do_not_simulate_leave_pybullet_unloaded(module):
-    printed = run_python(f'''
+    printed = run_python(f"""
         import sys
         import hand_codesign.core.{module}
         import hand_codesign.core
         print('pybullet' in sys.modules, hand_codesign.core.load_task.__name__)
-    ''')
+    """)
     assert printed == 'False load_task'
 
 
 def test_evaluate_is_reachable_from_the_package_and_loads_the_simulator():
-    printed = run_python('''
+    printed = run_python("""
         import sys
         import hand_codesign.core
         before = 'pybullet' in sys.modules
         evaluate = hand_codesign.core.evaluate
         print(before, 'pybullet' in sys.modules, callable(evaluate), evaluate.__name__)
-    ''')
+    """)
     assert printed == 'False True True evaluate'
 
 
 def test_evaluate_stays_the_function_after_its_module_was_imported_first():
-    printed = run_python('''
+    printed = run_python("""
         import hand_codesign.core.robustness  # imports the submodule core.evaluate
         from hand_codesign.core import evaluate, Simulator
         from hand_codesign.core import optimizers
         print(type(evaluate).__name__, Simulator.__name__, optimizers.__name__)
-    ''')
+    """)
     assert printed == 'function Simulator hand_codesign.core.optimizers'
 
 
 def test_unknown_name_is_an_attribute_error():
-    printed = run_python('''
+    printed = run_python("""
         import hand_codesign.core
         try:
             hand_codesign.core.no_such_name
         except AttributeError as error:
             print(error)
-    ''')
+    """)
     assert printed == "module 'hand_codesign.core' has no attribute 'no_such_name'"

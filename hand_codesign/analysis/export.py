@@ -232,7 +232,6 @@ class _Fields:
         return float(value)
 
 
-
 def load_export(folder):
     """Return the Export in folder (written by `hand-codesign export`)."""
     folder = pathlib.Path(folder)
