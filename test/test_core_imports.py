@@ -28,6 +28,18 @@ def test_modules_that_do_not_simulate_leave_pybullet_unloaded(module):
     assert printed == 'False load_task'
 
 
+@pytest.mark.parametrize('module', ['hand_codesign.cli', 'hand_codesign.analysis.report',
+                                    'hand_codesign.ros.optimizer_node',
+                                    'hand_codesign.ros.recorder_node'])
+def test_the_optimizer_recorder_and_analysis_leave_pybullet_unloaded(module):
+    printed = run_python(f"""
+        import sys
+        import {module}
+        print('pybullet' in sys.modules)
+    """)
+    assert printed == 'False'
+
+
 def test_evaluate_is_reachable_from_the_package_and_loads_the_simulator():
     printed = run_python("""
         import sys
