@@ -10,7 +10,7 @@ not MCAP, or an MCAP bag without hand_codesign topics raises ``BagError`` naming
 what was expected.
 
 Messages are decoded with decoders compiled from the schema text stored in the bag
-(``hand_codesign.analysis.cdr``, ten times faster than the libraries' decoders), falling back
+(``hand_codesign.analysis.cdr``, four to ten times faster than the libraries'), falling back
 to the rosbags typestore built from the same schema for anything those do not handle (e.g.
 big-endian CDR), and gathered per topic into column tables of numpy arrays.
 """

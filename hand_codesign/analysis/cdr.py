@@ -9,10 +9,10 @@ numpy arrays, repeated name lists shared). Messages are returned as tuples in fi
 (string lists as tuples); ``builtin_interfaces/Time`` and ``Duration`` become integer
 nanoseconds.
 
-Why this is not left to a library: on a bag of 200,000 loop messages these decoders take
-about a tenth of the time of the rosbags typestore built from the same schemas and a
-twenty-fifth of that of mcap-ros2-support (``bench/bench_bag.py``), and reading a run is the
-first step of every analysis.
+Why this is not left to a library: on a bag of 200,000 loop messages these decoders take a
+fourth (loaded machine) to a tenth (quiet machine) of the time of the rosbags typestore built
+from the same schemas, and a sixth to a twenty-fifth of that of mcap-ros2-support
+(``bench/bench_bag.py``); reading a run is the first step of every analysis.
 
 Only little-endian plain CDR (XCDR1, what Fast DDS and Cyclone DDS send for ROS 2) is
 compiled; ``compile_schema`` raises ``UnsupportedSchema`` for anything else (wstring, a
