@@ -18,7 +18,7 @@ DEMO_TASK ?= config/tasks/task5.yaml
 DEMO_ARGS ?= --evaluators 2 --iterations 30 --popsize 16 --world-states 16 --seed 1
 TEST_ARGS ?=
 
-.PHONY: setup demo test lint clean
+.PHONY: setup demo test clean
 
 setup: $(STAMPS)/package
 

@@ -1,5 +1,7 @@
 """read_run gives a run back from its bag, and says clearly what is wrong with a bad one."""
 
+from bag_samples import dds_bytes
+from bag_samples import interleaved
 from bag_samples import sample_messages
 from bag_samples import TASK_YAML
 from bag_samples import write_bag
@@ -7,6 +9,7 @@ from hand_codesign.analysis.bag import BagError
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.ros import topics
 from hand_codesign.ros.mcap_writer import BagWriter
+from mcap.reader import make_reader
 import numpy as np
 import pytest
 from rclpy.serialization import serialize_message
@@ -157,3 +160,44 @@ def test_two_runs_in_one_bag_are_told_apart(tmp_path):
     assert len(other.candidates) == 8 and other.run_info.run_id == 'run-b'
     with pytest.raises(BagError, match='run-c'):
         read_run(path, run_id='run-c')
+
+
+@pytest.mark.parametrize('compression', ['lz4', 'none'])
+def test_bags_of_other_chunk_compressions_read_alike(tmp_path, compression):
+    messages = sample_messages(generations=2)
+    reference = read_run(write_bag(tmp_path / 'zstd.mcap', messages).file_path)
+    path = tmp_path / f'{compression}.mcap'
+    writer = BagWriter(path, compression=compression)
+    for topic in messages:
+        writer.add_topic('/' + topic, topics.type_name(topics.MESSAGE_TYPES[topic]),
+                         [topics.QOS[topic]])
+    for index, (topic, message) in enumerate(interleaved(messages)):
+        writer.write('/' + topic, dds_bytes(message), log_time=1_000_000 + index)
+    writer.close()
+    record = read_run(path)
+    assert record.warnings == [] and record.message_counts == reference.message_counts
+    for name, key in (('candidates', 'genome'), ('evaluations', 'objectives'),
+                      ('generation_summaries', 'best')):
+        table, expected = getattr(record, name), getattr(reference, name)
+        assert list(table.columns) == list(expected.columns)
+        np.testing.assert_array_equal(table[key], expected[key])
+
+
+def test_a_damaged_chunk_is_skipped_and_the_rest_is_read(tmp_path):
+    messages = sample_messages(generations=4, population=20)
+    total = sum(len(values) for values in messages.values())
+    path = tmp_path / 'damaged.mcap'
+    write_bag(path, messages, flush_every=10)   # chunks of 10 messages
+    with open(path, 'rb') as stream:
+        chunks = make_reader(stream).get_summary().chunk_indexes
+    # the chunk record: opcode, length, start and end times, size, crc, "zstd", records length
+    data_start = chunks[2].chunk_start_offset + 1 + 8 + 8 + 8 + 8 + 4 + 4 + 4 + 8
+    damaged = bytearray(path.read_bytes())
+    damaged[data_start:data_start + 4] = bytes(4)   # the zstd frame's magic number
+    path.write_bytes(bytes(damaged))
+    record = read_run(path)
+    assert not record.truncated
+    assert any('damaged' in warning for warning in record.warnings), record.warnings
+    assert sum(record.message_counts.values()) == total - 10
+    assert len(record.candidates) + len(record.evaluations) < 2 * 80
+    assert record.run_info.seed == 4

@@ -30,7 +30,7 @@ def test_capacity_is_respected_and_load_balanced():
     assert len(sent) == 4
     assert sorted(evaluator for _, evaluator, _ in sent) == ['a', 'a', 'b', 'b']
     assert dispatcher.assignments(now=0.1) == []
-    assert dispatcher.complete(sent[0][0], sent[0][1])
+    assert dispatcher.complete(sent[0][0])
     assert [item for item, _, _ in sent_ids(dispatcher.assignments(now=0.2))] == [4]
 
 
@@ -53,9 +53,9 @@ def test_duplicates_and_unknown_ids_are_refused():
     dispatcher = make_dispatcher(1)
     dispatcher.heard_from('a', 1, now=0.0)
     dispatcher.assignments(now=0.0)
-    assert dispatcher.complete(0, 'a')
-    assert not dispatcher.complete(0, 'a')
-    assert not dispatcher.complete(99, 'a')
+    assert dispatcher.complete(0)
+    assert not dispatcher.complete(0)
+    assert not dispatcher.complete(99)
     assert dispatcher.unfinished == 0
 
 
@@ -68,8 +68,8 @@ def test_overdue_candidate_goes_to_another_evaluator_first_answer_wins():
     dispatcher.heard_from('b', 1, now=11.0)
     resent = sent_ids(dispatcher.assignments(now=11.0))
     assert len(resent) == 1 and resent[0][2] == 1
-    assert dispatcher.complete(0, resent[0][1])
-    assert not dispatcher.complete(0, 'a')
+    assert dispatcher.complete(0)
+    assert not dispatcher.complete(0)
 
 
 def test_rejected_candidate_moves_on_then_gives_up():

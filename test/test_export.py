@@ -112,7 +112,7 @@ def test_broken_export_names_file_and_key(exported, tmp_path):
     broken = tmp_path / 'controller.yaml'
     broken.write_text(text.replace('segment_lengths:', 'segment_length:', 1))
     with pytest.raises(UserError, match=r'controller.yaml: design.fingers\[0\]'
-                                        r'.segment_lengths: expected this key'):
+                                        r'.segment_length: expected no such key'):
         load_export(tmp_path)
     broken.write_text('format: something else\n')
     with pytest.raises(UserError, match='format: expected'):

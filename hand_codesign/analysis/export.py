@@ -22,21 +22,16 @@ the recorded ones (floats are written with their exact shortest repr, so they ro
 """
 
 import dataclasses
-import math
 import pathlib
-import xml.etree.ElementTree as ElementTree
 
 from hand_codesign.analysis import records
-from hand_codesign.core.design import ControllerDesign
 from hand_codesign.core.design import Design
-from hand_codesign.core.design import FingerDesign
-from hand_codesign.core.design import HandDesign
-from hand_codesign.core.design import JointDesign
 from hand_codesign.core.evaluate import evaluate_design
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.hand import hand_model
 from hand_codesign.core.hand import hand_urdf
 from hand_codesign.core.runs import run_task
+from hand_codesign.core.task import parse_design
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 import numpy as np
@@ -78,58 +73,6 @@ def _objective_text(names, values):
 
 
 # -------------------------------------------------------------------- writing
-
-def _rpy_z_axis(rpy):
-    """Return where the z axis of a frame turned by URDF roll, pitch, yaw points."""
-    roll, pitch, yaw = rpy
-    # third column of Rz(yaw) Ry(pitch) Rx(roll)
-    return (math.cos(yaw) * math.sin(pitch) * math.cos(roll) + math.sin(yaw) * math.sin(roll),
-            math.sin(yaw) * math.sin(pitch) * math.cos(roll) - math.cos(yaw) * math.sin(roll),
-            math.cos(pitch) * math.cos(roll))
-
-
-def _vector_text(values):
-    return ' '.join(repr(float(value)) for value in values)
-
-
-def standard_urdf(urdf_text):
-    """
-    Return URDF text with every capsule replaced by a cylinder and two end spheres.
-
-    The three shapes cover exactly the capsule's volume, in elements of standard URDF.
-    """
-    robot = ElementTree.fromstring(urdf_text)
-    for link in robot.iter('link'):
-        for element in list(link):
-            capsule = element.find('geometry/capsule')
-            if element.tag not in ('visual', 'collision') or capsule is None:
-                continue
-            origin = element.find('origin')
-            xyz = [float(v) for v in (origin.get('xyz', '0 0 0') if origin is not None
-                                      else '0 0 0').split()]
-            rpy = [float(v) for v in (origin.get('rpy', '0 0 0') if origin is not None
-                                      else '0 0 0').split()]
-            radius = capsule.get('radius')
-            length = float(capsule.get('length'))
-            axis = _rpy_z_axis(rpy)
-            position = list(link).index(element)
-            link.remove(element)
-            shapes = [('cylinder', {'radius': radius, 'length': repr(length)}, xyz, rpy)]
-            for sign in (-1.0, 1.0):
-                # rounding noise of the turned axis (1e-18) would print as a real offset
-                centre = [c + sign * length / 2 * (a if abs(a) > 1e-12 else 0.0)
-                          for c, a in zip(xyz, axis)]
-                shapes.append(('sphere', {'radius': radius}, centre, (0.0, 0.0, 0.0)))
-            for offset, (tag, attributes, centre, turn) in enumerate(shapes):
-                part = ElementTree.Element(element.tag)
-                ElementTree.SubElement(part, 'origin', xyz=_vector_text(centre),
-                                       rpy=_vector_text(turn))
-                geometry = ElementTree.SubElement(part, 'geometry')
-                ElementTree.SubElement(geometry, tag, attributes)
-                link.insert(position + offset, part)
-    ElementTree.indent(robot, space='  ')
-    return '<?xml version="1.0"?>\n' + ElementTree.tostring(robot, encoding='unicode') + '\n'
-
 
 def _floats(values):
     return [float(value) for value in np.asarray(values, dtype=float).ravel()]
@@ -233,9 +176,9 @@ def export_design(record, recorded, out):
     try:
         out.mkdir(parents=True, exist_ok=True)
         urdf_path = out / URDF_NAME
-        urdf_path.write_text(standard_urdf(hand_urdf(
-            design.hand, task.hand, name=f'{task.name}_candidate{recorded.candidate_id}')),
-            encoding='utf-8')
+        urdf_path.write_text(hand_urdf(
+            design.hand, task.hand, name=f'{task.name}_candidate{recorded.candidate_id}',
+            capsules=False), encoding='utf-8')
         yaml_path = out / YAML_NAME
         header = (f'# {task.name}: candidate {recorded.candidate_id} of run {record.run_id}, '
                   f'exported by hand-codesign export.\n# The hand is {URDF_NAME}; values are '
@@ -288,60 +231,6 @@ class _Fields:
             self.fail(key, f'a number, got {value!r}')
         return float(value)
 
-    def numbers(self, value, key, count=None):
-        if not isinstance(value, list) or (count is not None and len(value) != count):
-            self.fail(key, f'a list of {count or "some"} numbers, got {value!r}')
-        return tuple(self.number(item, f'{key}[{index}]') for index, item in enumerate(value))
-
-
-def design_from_document(document, fields, key='design'):
-    """Return the Design of design_document() data."""
-    document = fields.mapping(document, key)
-    fingers = []
-    finger_list = fields.get(document, 'fingers', key)
-    if not isinstance(finger_list, list) or not finger_list:
-        fields.fail(f'{key}.fingers', 'a non-empty list of fingers')
-    for index, finger in enumerate(finger_list):
-        finger_key = f'{key}.fingers[{index}]'
-        finger = fields.mapping(finger, finger_key)
-        joints = []
-        for joint_index, joint in enumerate(fields.get(finger, 'joints', finger_key)):
-            joint_key = f'{finger_key}.joints[{joint_index}]'
-            joint = fields.mapping(joint, joint_key)
-            limits = (None, None)
-            if 'lower_limit' in joint:
-                limits = (fields.number(joint['lower_limit'], f'{joint_key}.lower_limit'),
-                          fields.number(fields.get(joint, 'upper_limit', joint_key),
-                                        f'{joint_key}.upper_limit'))
-            joints.append(JointDesign(
-                axis_angle=fields.number(fields.get(joint, 'axis_angle', joint_key),
-                                         f'{joint_key}.axis_angle'),
-                initial_angle=fields.number(fields.get(joint, 'initial_angle', joint_key),
-                                            f'{joint_key}.initial_angle'),
-                lower_limit=limits[0], upper_limit=limits[1]))
-        fingers.append(FingerDesign(
-            position=fields.numbers(fields.get(finger, 'position', finger_key),
-                                    f'{finger_key}.position', 2),
-            segment_lengths=fields.numbers(fields.get(finger, 'segment_lengths', finger_key),
-                                           f'{finger_key}.segment_lengths', len(joints)),
-            joints=tuple(joints)))
-    hand = HandDesign(fingers=tuple(fingers),
-                      friction=fields.number(fields.get(document, 'friction', key),
-                                             f'{key}.friction'))
-    controller_key = f'{key}.controller'
-    controller = fields.mapping(fields.get(document, 'controller', key), controller_key)
-    rows = fields.get(controller, 'values', controller_key)
-    if not isinstance(rows, list) or not rows:
-        fields.fail(f'{controller_key}.values', 'a list of rows, one per knot')
-    values = np.array([fields.numbers(row, f'{controller_key}.values[{index}]', hand.num_joints)
-                       for index, row in enumerate(rows)], dtype=float)
-    gains = {name: (np.array(fields.numbers(controller[name], f'{controller_key}.{name}',
-                                            hand.num_joints)) if name in controller else None)
-             for name in ('kp', 'kd')}
-    return Design(hand=hand, controller=ControllerDesign(
-        kind=str(fields.get(controller, 'kind', controller_key)), values=values,
-        kp=gains['kp'], kd=gains['kd']))
-
 
 def load_export(folder):
     """Return the Export in folder (written by `hand-codesign export`)."""
@@ -368,7 +257,10 @@ def load_export(folder):
                         task_document.get('structure'))
     except (TaskError, ValueError, TypeError) as error:
         raise UserError(f'{path}: task: cannot rebuild the task: {error}') from None
-    design = design_from_document(fields.get(document, 'design', ''), fields)
+    try:
+        design = parse_design(fields.get(document, 'design', ''), str(path))
+    except TaskError as error:
+        raise UserError(str(error)) from None
     if design.hand.structure != tuple(task.structure):
         fields.fail('design.fingers', f'the structure of the task, {list(task.structure)}, got '
                                       f'{list(design.hand.structure)}')

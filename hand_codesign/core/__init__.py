@@ -1,13 +1,57 @@
-"""Pure-Python core of hand_codesign: tasks, hand model, simulation, objectives, optimizers."""
+"""
+Pure-Python core of hand_codesign: tasks, hand model, simulation, objectives, optimizers.
 
-from hand_codesign.core.evaluate import evaluate, Evaluation
-from hand_codesign.core.genome import decode, genome_spec, GenomeSpec, objective_names
-from hand_codesign.core.sim import Simulator
-from hand_codesign.core.task import load_task, parse_task, Task, TaskError
-from hand_codesign.core.worlds import grid_world_states, world_states, WorldState
+The names below are loaded on first use (PEP 562), not when the package is imported: the
+simulator imports PyBullet, which silences the process's standard streams while it loads, and
+the optimizer or an analysis never simulate. ``import hand_codesign.core.task`` loads the task
+module alone; ``hand_codesign.core.evaluate`` loads the simulator when it is first touched.
+"""
 
-__all__ = [
-    'decode', 'evaluate', 'Evaluation', 'genome_spec', 'GenomeSpec', 'grid_world_states',
-    'load_task', 'objective_names', 'parse_task', 'Simulator', 'Task', 'TaskError',
-    'world_states', 'WorldState',
-]
+import importlib
+import sys
+import types
+
+# exported name -> the submodule of core that defines it
+_EXPORTS = {
+    'decode': 'genome', 'genome_spec': 'genome', 'GenomeSpec': 'genome',
+    'objective_names': 'genome',
+    'evaluate': 'evaluate', 'Evaluation': 'evaluate',
+    'Simulator': 'sim',
+    'load_task': 'task', 'parse_task': 'task', 'Task': 'task', 'TaskError': 'task',
+    'grid_world_states': 'worlds', 'world_states': 'worlds', 'WorldState': 'worlds',
+}
+
+__all__ = sorted(_EXPORTS, key=str.lower)
+
+
+def __getattr__(name):
+    """Import the submodule that defines an exported name, on first use."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f'module {__name__!r} has no attribute {name!r}')
+    value = getattr(importlib.import_module(f'{__name__}.{module}'), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    """List the exported names beside what is loaded already."""
+    return sorted(set(globals()) | set(_EXPORTS))
+
+
+class _CorePackage(types.ModuleType):
+    """
+    The package, keeping its exported function ``evaluate`` over the submodule of that name.
+
+    Importing a submodule sets it as an attribute of its package; for ``core.evaluate`` that
+    would hide the function ``evaluate`` whenever the submodule was imported first.
+    """
+
+    def __setattr__(self, name, value):
+        if (isinstance(value, types.ModuleType) and _EXPORTS.get(name) == name
+                and value.__name__ == f'{__name__}.{name}'):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _CorePackage

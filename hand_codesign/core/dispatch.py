@@ -98,8 +98,8 @@ class Dispatcher:
             pending.attempts += 1
         return sent
 
-    def complete(self, candidate_id, evaluator_id):
-        """Accept an evaluation; return False for an unknown or duplicate one."""
+    def complete(self, candidate_id):
+        """Accept the first answer to a candidate, from any evaluator; False if unknown or done."""
         for state in self.evaluators.values():
             state.assigned.pop(candidate_id, None)
         return self._pending.pop(candidate_id, None) is not None

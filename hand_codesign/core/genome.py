@@ -35,7 +35,7 @@ lower <= upper, and the initial angle is clipped into the joint's limits.
 """
 
 from dataclasses import dataclass
-from typing import Mapping, Optional, Tuple
+from typing import Mapping, Optional
 
 from hand_codesign.core.design import (ControllerDesign, Design, FingerDesign, HandDesign,
                                        JointDesign)
@@ -169,11 +169,6 @@ def decode(x, task: Task) -> Design:
 def objective_names(task: Task):
     """Return the objective names in Evaluation order: position_1.., then orientation_1.."""
     return list(task.objective_names)
-
-
-def objective_weights(task: Task):
-    """Return the fitness weights aligned with objective_names: w_p, then w_r."""
-    return task.objective_weights
 
 
 class _Builder:
@@ -382,11 +377,6 @@ class _Builder:
             for index, source in enumerate(sources):
                 put(source, getattr(controller, name)[index])
         return physical
-
-
-def genome_names(task: Task) -> Tuple[str, ...]:
-    """Return the gene names of the task's structure (as in the Candidate message)."""
-    return tuple(genome_spec(task).names)
 
 
 def seed_genome(task: Task) -> Optional[np.ndarray]:

@@ -383,15 +383,6 @@ class Trace:
         self.count = check + 1
         return self.schedule.should_stop(check, position, orientation)
 
-    @property
-    def complete(self):
-        return self.count >= self.schedule.num_checks
-
-    @property
-    def stop_time(self):
-        """Return the time of the last recorded check (0 before the first)."""
-        return float(self.schedule.check_times[self.count - 1]) if self.count else 0.0
-
     def objective_values(self, margins=None):
         """Return this world's h_o (or h'_o) per objective."""
         return self.schedule.objective_values(self.positions, self.orientations, self.count,

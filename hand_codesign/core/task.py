@@ -427,6 +427,11 @@ def parse_task(text, source='<task>'):
     return task
 
 
+def parse_design(document, source, key='design'):
+    """Validate a Design mapping in the format of `seed_design`; TaskError names source, key."""
+    return _Reader(source).design(document, key)
+
+
 class _Reader:
     """Walks the parsed YAML, checking keys and types with dotted paths for errors."""
 
@@ -487,10 +492,11 @@ class _Reader:
             self.fail(key, 'a non-empty string', value)
         return value
 
-    def vector(self, value, key, size, positive=False, angle=False):
+    def vector(self, value, key, size, positive=False, angle=False, minimum=None):
         if not isinstance(value, list) or len(value) != size:
             self.fail(key, f'a list of {size} numbers', value)
-        return tuple(self.number(item, f'{key}[{index}]', positive=positive, angle=angle)
+        return tuple(self.number(item, f'{key}[{index}]', positive=positive, angle=angle,
+                                 minimum=minimum)
                      for index, item in enumerate(value))
 
     def bounds(self, value, key, angle=False, minimum=None):
@@ -930,8 +936,9 @@ class _Reader:
                 if name not in section:
                     self.fail(_join(key, name), f'this key for a pd controller ({num_joints} '
                               'values)', got=False)
+                # >= 0 as the policy's gain bounds: a design with kd fixed at 0 reads back
                 gains[name] = np.array(self.vector(section[name], _join(key, name),
-                                                   num_joints, positive=True))
+                                                   num_joints, minimum=0))
             elif name in section:
                 self.fail(_join(key, name), 'no gains for a torque controller', got=False)
         return ControllerDesign(kind=kind, values=values, kp=gains.get('kp'),

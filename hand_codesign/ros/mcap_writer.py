@@ -21,6 +21,20 @@ rebuilds it for a directory whose recorder was killed).
 
 Message definitions are looked up at run time in ``share/<pkg>/msg/<Type>.msg`` of the
 packages on ``AMENT_PREFIX_PATH`` (via ament_index_python), so any installed type works.
+
+Records, chunks, compression and the summary are mcap's ``Writer``; what is ours is only what
+rosbag2 adds and no library here writes:
+
+- the schema text: rosbag2 stores the .msg files as they are, comments included, joined as
+  above; rosbags' ``Typestore.generate_msgdef`` writes a text of its own (361 characters for
+  RunInfo, against rosbag2's 1,804), so readers that compare definitions see another type.
+  The dependency scan below is rosbag2's own regular expression, for the same bytes;
+- the bag itself: ``rosbags.rosbag2.Writer`` takes raw CDR and a given schema text, but it
+  writes only bag directories (no bare ``.mcap`` file), cannot flush the chunk in progress
+  (a killed recorder loses everything since the last full 1 MiB chunk, and the chunk index
+  lives in memory until close), records one time per message (no publish time) and leaves
+  out the channel's ``topic_type_hash``; mcap-ros2-support's writer serializes message
+  objects itself and takes no raw CDR.
 """
 
 import json

@@ -139,7 +139,7 @@ class OptimizerNode(Node):
                     f'candidate {message.candidate_id} rejected by {message.evaluator_id}: '
                     f'{message.reason}')
             return
-        if self.dispatcher.complete(message.candidate_id, message.evaluator_id):
+        if self.dispatcher.complete(message.candidate_id):
             self.results[message.candidate_id] = np.array(message.objectives, dtype=float)
             self.wall_times.append(message.wall_time)
             self.advance()
