@@ -4,9 +4,9 @@ A run's whole search, driven one batch at a time: one optimization, or the hiera
 The optimizer node, resume and analysis see every task the same way through `Search`:
 `ask()` gives a batch of candidates, `batch_task` the task to evaluate them with (the
 structure and, for the check of a structure's best design, the hierarchy's evaluation world
-states), `tell()` takes id -> objectives, `stop()` says why it ended. With early_termination.horizon
-the batch task also holds the sub-problem's horizon (core.horizon), which grows from what
-`tell()` was told and which every candidate of the batch carries.
+states), `tell()` takes id -> objectives, `stop()` says why it ended. With
+early_termination.horizon the batch task also holds the sub-problem's horizon (core.horizon),
+which grows from what `tell()` was told and which every candidate of the batch carries.
 """
 
 import dataclasses
@@ -54,7 +54,7 @@ class Search:
 
     @property
     def horizon(self):
-        """Return the horizon (s) of the batch of `ask()`, or None without one."""
+        """Return the horizon in seconds of the batch of `ask()`, or None without one."""
         return None if self._horizon is None else self._horizon.current
 
     @property
