@@ -3,6 +3,12 @@
 import dataclasses
 import pathlib
 
+from analysis_run import copy_bag
+from analysis_run import decoded_messages
+from analysis_run import run_cli
+from hand_codesign.analysis import records
+from hand_codesign.analysis.resume import resume_point
+from hand_codesign.cli import main
 from hand_codesign.core import TaskError
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.horizon import Horizon
@@ -10,6 +16,7 @@ from hand_codesign.core.objectives import goal_schedule
 from hand_codesign.core.optimizers import replay
 from hand_codesign.core.runs import load_run_task, run_task
 from hand_codesign.core.search import Search
+from hand_codesign.ros import topics
 import numpy as np
 import pytest
 from test_objectives import follow, small_task
@@ -159,3 +166,42 @@ def test_task2_follows_the_growing_horizon_to_a_better_whole_rollout():
     staged_best = evaluate(search.best[0].x, whole).fitness
     plain_best = evaluate(plain_search.best[0].x, whole).fitness
     assert staged_best < plain_best
+
+
+def test_a_horizon_run_is_recorded_replayed_and_resumed(tmp_path, capsys):
+    bag = tmp_path / 'task3_run'
+    process = run_cli('run', '--task', TASKS / 'task3.yaml', '--evaluators', '2', '--bag', bag,
+                      '--iterations', '4', '--popsize', '6', '--world-states', '2',
+                      '--seed', '2', '--quiet')
+    assert process.returncode == 0, process.stdout + process.stderr
+    mcap = next(bag.glob('*.mcap'))
+    sent = {}
+    for message in decoded_messages(mcap, topics.CANDIDATES):
+        sent.setdefault(message.generation, set()).add(message.horizon)
+    summaries = [message for message in decoded_messages(mcap, topics.GENERATION_SUMMARY)
+                 if not message.final]
+    record = records.open_run(bag)
+    rebuilt = Search(records.run_task_of(record))
+    assert replay(rebuilt, records.recorded_evaluations(record)) == 4
+    assert [sent[generation] for generation in range(4)] == [{h} for h in rebuilt.horizons]
+    assert [message.horizon for message in summaries] == rebuilt.horizons
+    assert rebuilt.horizons[0] == 0.1 and rebuilt.horizons[-1] > 0.1
+
+    # the last generation's best design, evaluated on its horizon, replays bit for bit
+    capsys.readouterr()
+    assert main(['replay', str(bag), '--generation', '3', '--gif',
+                 str(tmp_path / 'best.gif')]) == 0
+    printed = capsys.readouterr().out
+    assert f'horizon {rebuilt.horizons[3]:g} s' in printed and 'bit for bit' in printed
+
+    # resumed in the middle of generation 3, the search continues on that generation's horizon
+    third = [m.candidate_id for m in decoded_messages(mcap, topics.EVALUATIONS)
+             if m.generation == 3][:2]
+    cut = copy_bag(mcap, tmp_path / 'cut.mcap', keep=lambda topic, _, message: not (
+        topic == topics.GENERATION_SUMMARY and message.generation >= 3
+        or topic == topics.EVALUATIONS and message.generation == 3
+        and message.candidate_id not in third))
+    point = resume_point(cut)
+    assert point.search.horizons == rebuilt.horizons[:3]
+    assert {c.horizon for c in point.pending} == {rebuilt.horizons[3]}
+    assert set(point.known) == set(third)

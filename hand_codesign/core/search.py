@@ -62,6 +62,13 @@ class Search:
         """Return the horizon of every generation told so far (empty without one)."""
         return [] if self._horizon is None else list(self._horizon.history)
 
+    def horizon_of(self, generation):
+        """Return the horizon (s) generation `generation` was or is evaluated on; 0: none."""
+        if self._horizon is None:
+            return 0.0
+        history = self._horizon.history
+        return history[generation] if generation < len(history) else self._horizon.current
+
     def ask(self):
         """Return the next batch, each candidate with its structure (the same until told)."""
         if self._batch is None:

@@ -246,6 +246,7 @@ class OptimizerNode(Node):
                 'stop_reason': stop_reason, 'evaluations': self.told,
                 'structure': list(structure),
                 'best_candidate_id': result.candidate_id, 'generation': result.generation,
+                'horizon': self.search.horizon_of(result.generation),
                 'fitness': result.fitness,
                 'objectives': dict(zip(self.task.objective_names, result.objectives.tolist())),
                 'design': genome_spec(self.task.replace(structure=structure)).design_values(
