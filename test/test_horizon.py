@@ -6,6 +6,8 @@ import pathlib
 from analysis_run import copy_bag
 from analysis_run import decoded_messages
 from analysis_run import run_cli
+from bag_samples import interleaved
+from bag_samples import sample_messages
 from hand_codesign.analysis import records
 from hand_codesign.analysis.resume import resume_point
 from hand_codesign.cli import main
@@ -17,6 +19,8 @@ from hand_codesign.core.optimizers import replay
 from hand_codesign.core.runs import load_run_task, run_task
 from hand_codesign.core.search import Search
 from hand_codesign.ros import topics
+from hand_codesign.ros.mcap_writer import message_definition
+from mcap_ros2.writer import Writer
 import numpy as np
 import pytest
 from test_objectives import follow, small_task
@@ -205,3 +209,24 @@ def test_a_horizon_run_is_recorded_replayed_and_resumed(tmp_path, capsys):
     assert point.search.horizons == rebuilt.horizons[:3]
     assert {c.horizon for c in point.pending} == {rebuilt.horizons[3]}
     assert set(point.known) == set(third)
+
+
+def test_a_bag_from_before_the_horizon_reads_as_without_one(tmp_path):
+    # Candidate and GenerationSummary written with their definitions before the horizon field
+    messages = sample_messages(generations=2, population=4, worlds=2)
+    path = tmp_path / 'older.mcap'
+    with open(path, 'wb') as stream:
+        writer = Writer(stream)
+        for index, (topic, message) in enumerate(interleaved(messages)):
+            type_name = topics.type_name(type(message))
+            definition = '\n'.join(line for line in message_definition(type_name).splitlines()
+                                   if 'horizon' not in line and 'sub-problem' not in line
+                                   and 'hand_codesign.core.horizon' not in line)
+            schema = writer.register_msgdef(type_name, definition)
+            writer.write_message('/' + topic, schema, message, log_time=index + 1)
+        writer.finish()
+    record = records.open_run(path)
+    assert 'horizon' not in record.candidates and 'horizon' not in record.generation_summaries
+    design = records.recorded_design(record, 6)
+    assert design.horizon == 0.0 and records.design_task(record, design).horizon is None
+    np.testing.assert_array_equal(design.x, messages[topics.CANDIDATES][6].genome)
