@@ -78,15 +78,17 @@ class RunInfo:
     stamp: int          # ns since the epoch, from the message
     log_time: int       # ns since the epoch, when the recorder received it
 
-    def task(self, structure=None, source='bag:run_info', world_states=None):
+    def task(self, structure=None, source='bag:run_info', world_states=None, horizon=None):
         """
         Return the Task the run used: its task text with the run's overrides applied.
 
-        `structure` and `world_states` (e.g. a hierarchy check's) replace the run's.
+        `structure` and `world_states` (e.g. a hierarchy check's) replace the run's;
+        `horizon` is a candidate's sub-problem (Candidate.horizon).
         """
         return run_task(self.task_yaml, source=source, seed=self.seed,
                         iterations=self.iterations, population=self.population,
-                        world_states=world_states or self.world_states, structure=structure)
+                        world_states=world_states or self.world_states, structure=structure,
+                        horizon=horizon)
 
 
 class Table:

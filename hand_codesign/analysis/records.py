@@ -60,11 +60,12 @@ def require_run_info(record, purpose):
     return record.run_info
 
 
-def run_task_of(record, structure=None, world_states=None):
-    """Return the Task of the run (for `structure` and `world_states` when given)."""
+def run_task_of(record, structure=None, world_states=None, horizon=None):
+    """Return the Task of the run (for `structure`, `world_states`, `horizon` when given)."""
     info = require_run_info(record, 'rebuilding the task')
     try:
-        return info.task(structure, f'{record.path} (RunInfo.task_yaml)', world_states)
+        return info.task(structure, f'{record.path} (RunInfo.task_yaml)', world_states,
+                         horizon)
     except (TaskError, ValueError) as error:
         raise UserError(f'{record.path}: the task recorded in the bag cannot be rebuilt: '
                         f'{error}') from None
@@ -230,6 +231,7 @@ class RecordedDesign:
     generation: int
     structure: tuple
     world_states: int            # 0: the run's number of world states
+    horizon: float               # s, its sub-problem (core.horizon); 0: none (older bags too)
     x: np.ndarray                # normalized genome, as sent to the evaluator
     genome_names: tuple
     objective_names: list
@@ -267,6 +269,7 @@ def recorded_design(record, candidate_id):
         candidate_id=int(candidate_id), generation=int(candidate['generation']),
         structure=tuple(int(joints) for joints in candidate['structure']),
         world_states=int(candidate.get('world_states', 0) or 0),
+        horizon=float(candidate.get('horizon', 0.0) or 0.0),
         x=np.asarray(candidate['genome'], dtype=float),
         genome_names=tuple(candidate['genome_names']), objective_names=names,
         objectives=objectives, fitness=fitness, world_objectives=world_objectives,
@@ -275,7 +278,8 @@ def recorded_design(record, candidate_id):
 
 def design_task(record, design):
     """Return the Task with which a RecordedDesign was evaluated."""
-    return run_task_of(record, design.structure or None, design.world_states or None)
+    return run_task_of(record, design.structure or None, design.world_states or None,
+                       design.horizon or None)
 
 
 def last_summary(record):

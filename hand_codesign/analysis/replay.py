@@ -50,8 +50,9 @@ def replay_command(arguments):
     if not 0 <= arguments.world < len(worlds):
         raise UserError(f'--world {arguments.world}: the run has {len(worlds)} world states; '
                         f'expected 0 to {len(worlds) - 1}')
+    horizon = f', horizon {design.horizon:g} s' if design.horizon else ''
     print(f'replaying candidate {design.candidate_id} of generation {design.generation} '
-          f'(structure {list(design.structure)}, evaluated by '
+          f'(structure {list(design.structure)}{horizon}, evaluated by '
           f'{design.evaluator_id or "nobody in the bag"}) on {len(worlds)} world states')
     started = time.perf_counter()
     evaluation = evaluate(design.x, task)

@@ -115,6 +115,7 @@ class Generations:
         self.wall_time = wall_time
         self.source = source                # 'summaries' or 'evaluations'
         self.rows = rows                    # the GenerationSummary rows, when from summaries
+        self.horizons = np.zeros(len(generations))  # s, of a staged search (0: none)
 
     def __len__(self):
         return len(self.generations)
@@ -145,10 +146,14 @@ def generations_from_summaries(record, num_objectives):
     rows = np.flatnonzero(keep)
     best = records._row_matrix(summaries['best'], rows, num_objectives)
     median = records._row_matrix(summaries['median'], rows, num_objectives)
-    return Generations([structures[row] for row in rows], generation[rows], best, median,
-                       np.asarray(summaries['best_fitness'], dtype=float)[rows],
-                       np.asarray(summaries['evaluations'], dtype=float)[rows],
-                       np.asarray(summaries['wall_time'], dtype=float)[rows], 'summaries', rows)
+    generations = Generations(
+        [structures[row] for row in rows], generation[rows], best, median,
+        np.asarray(summaries['best_fitness'], dtype=float)[rows],
+        np.asarray(summaries['evaluations'], dtype=float)[rows],
+        np.asarray(summaries['wall_time'], dtype=float)[rows], 'summaries', rows)
+    if 'horizon' in summaries:  # older bags have no horizon
+        generations.horizons = np.asarray(summaries['horizon'], dtype=float)[rows]
+    return generations
 
 
 def generations_from_evaluations(rows, weights):
@@ -334,7 +339,8 @@ class Report:
         header = (['structure', 'generation']
                   + [f'best_{name}' for name in self.names]
                   + [f'median_{name}' for name in self.names]
-                  + ['best_fitness_so_far', 'evaluations', 'wall_time'])
+                  + ['best_fitness_so_far', 'evaluations', 'wall_time']
+                  + (['horizon'] if generations.horizons.any() else []))
         columns = [['x'.join(str(j) for j in structure) for structure in generations.structures],
                    _int_texts(generations.generations)]
         columns += [_float_texts(generations.best[:, i]) for i in range(len(self.names))]
@@ -343,6 +349,8 @@ class Report:
                     [_number(value) if value != value else str(int(value))
                      for value in generations.evaluations.tolist()],
                     _float_texts(generations.wall_time)]
+        if generations.horizons.any():
+            columns.append(_float_texts(generations.horizons))
         write_csv(path, header, columns)
 
     def write_front_csv(self, path):
@@ -381,7 +389,9 @@ class Report:
             return lines + ['No design was evaluated successfully.']
         lines.append(f'Candidate {design.candidate_id} of generation {design.generation}, '
                      f'structure {list(design.structure)}, evaluated by '
-                     f'{design.evaluator_id or "(no evaluation in the bag)"}.')
+                     f'{design.evaluator_id or "(no evaluation in the bag)"}'
+                     + (f' up to the horizon {design.horizon:g} s (its objectives are those of '
+                        'that sub-problem).' if design.horizon else '.'))
         if design.objectives is not None:
             lines += ['', '| objective | value |', '|---|---|']
             lines += [f'| {name} | {value:.6g} |'
@@ -409,8 +419,9 @@ class Report:
             objectives = ('' if design.objectives is None else ', '.join(
                 f'{name} {value:.4g}' for name, value in zip(self.names, design.objectives)))
             fitness = '' if design.fitness is None else f'fitness {design.fitness:.4g}'
+            horizon = f', horizon {design.horizon:g} s' if design.horizon else ''
             lines += ['', f'best design: candidate {design.candidate_id} (generation '
-                          f'{design.generation}), {fitness} ({objectives})']
+                          f'{design.generation}{horizon}), {fitness} ({objectives})']
             for name, value, unit, *_ in self.best_parameters():
                 lines.append(f'  {name:<40} {value:>12.6g} {unit}')
         return '\n'.join(lines)

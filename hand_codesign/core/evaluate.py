@@ -9,6 +9,7 @@ unstable); the objectives are their mean over the worlds plus the torque penalty
 
 evaluate is a pure function of (x, task, worlds): the process-wide Simulator is reset and
 rebuilt for every candidate, so results are bit-identical in any process and in any order.
+A candidate's sub-problem (Candidate.horizon) is part of its task: task.replace(horizon=...).
 """
 
 from dataclasses import dataclass

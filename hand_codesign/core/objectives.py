@@ -49,6 +49,11 @@ s_o each, counted by the proportion a_o = (T(o) - t_stop) / (T(o) - t(o)) of the
 paper's formula as printed; for a trajectory, reading the charge as a_o s_o / |o| instead
 would make stopping early cheaper than finishing, so the proportion counts samples. When the
 rollout stops before an objective's window, a_o > 1: stopping earlier costs more.
+
+A horizon (task.horizon, set per candidate by the search: hand_codesign.core.horizon) keeps
+only the checks up to it and stops at none of them: the rollout ends at the last check at or
+before the horizon and is scored as eq. (6) with t_stop there. At or beyond the last goal it is
+the whole rollout, scored by eq. (5).
 """
 
 import math
@@ -189,6 +194,32 @@ class GoalSchedule:
         self.relative_to_start = task.goals.relative_to_start
         self.start_position = np.array(start.position, dtype=float)
         self.start_orientation = tuple(start.orientation)
+        self.all_checks = self.num_checks
+        self.horizon = None
+        if task.horizon is not None:
+            self._limit_to(task.horizon)
+
+    def _limit_to(self, horizon):
+        """
+        Keep the checks up to `horizon` (s) and stop nowhere before it (see horizon.py).
+
+        The rollout ends at the last check at or before the horizon and is scored as if early
+        termination had stopped it there: eq. (6) with t_stop = that check.
+        """
+        if self.margins is None:
+            raise TaskError(f'{self.task_source}: a horizon ({horizon} s) needs '
+                            'early_termination (its margins charge the goals after it)')
+        kept = int(np.searchsorted(self.check_times, horizon + 1e-9, side='right'))
+        if kept == 0:
+            raise TaskError(f'{self.task_source}: horizon {horizon} s ends before the first '
+                            f'check at {self.check_times[0]} s')
+        self.horizon = float(horizon)
+        self.num_checks = kept
+        self.check_steps = self.check_steps[:kept]
+        self.check_step_list = self.check_step_list[:kept]
+        self.check_times = self.check_times[:kept]
+        self.termination = np.zeros(kept, dtype=bool)
+        self._termination_list = (False,) * kept
 
     # ---- building
 
@@ -243,11 +274,13 @@ class GoalSchedule:
         return table
 
     def goal_samples(self):
-        """Return (objective name, time, target) of every goal sample, by check then objective."""
+        """Return (objective name, time, target) of every goal sample (up to the horizon)."""
         samples = []
         for table in (self._position, self._orientation):
             for check, objective, target in zip(table['check'], table['objective'],
                                                 table['target']):
+                if check >= self.num_checks:
+                    continue
                 samples.append((self.objective_names[objective],
                                 float(self.check_times[check]), target.copy()))
         samples.sort(key=lambda sample: (sample[1], self.objective_names.index(sample[0])))
@@ -340,7 +373,24 @@ class GoalSchedule:
         """
         objectives, errors = self.sample_errors(positions, orientations, num_recorded)
         sums = np.bincount(objectives, weights=errors, minlength=self.num_objectives)
-        if num_recorded >= self.num_checks:
+        return self._charged(sums, num_recorded, margins)
+
+    def margin_values(self):
+        """
+        Return h'_o of a whole rollout (to the horizon, if any) missing every goal by s_o.
+
+        The horizon rule's yardstick: a design at or below it in every objective tracks the
+        goals up to the horizon within the margins on average.
+        """
+        objectives, _ = self.sample_errors(np.zeros((self.num_checks, 3)),
+                                           np.zeros((self.num_checks, 4)), self.num_checks)
+        sums = np.bincount(objectives, weights=self.margins[objectives],
+                           minlength=self.num_objectives)
+        return self._charged(sums, self.num_checks)
+
+    def _charged(self, sums, num_recorded, margins=None):
+        """Return eq. (5)'s mean of the error sums, or eq. (6) for a rollout cut short."""
+        if num_recorded >= self.all_checks:
             return sums / self.objective_sizes
         margins = self.margins if margins is None else np.asarray(margins, dtype=float)
         if margins is None:
@@ -417,7 +467,7 @@ _SCHEDULES = {}
 def goal_schedule(task: Task) -> GoalSchedule:
     """Return the GoalSchedule of a task (built once per distinct task and reused)."""
     key = (task.source_text, task.source, task.time_step, task.duration, task.goals,
-           task.early_termination, task.object_spec)
+           task.early_termination, task.object_spec, task.horizon)
     schedule = _SCHEDULES.get(key)
     if schedule is None:
         if len(_SCHEDULES) > 64:

@@ -74,6 +74,7 @@ class Candidate:
     generation: int
     x: np.ndarray
     structure: tuple = ()  # joints per finger; set by the hierarchy, () for a single structure
+    horizon: float = 0.0  # s, the sub-problem it is evaluated on (core.horizon); 0: none
 
 
 @dataclasses.dataclass(frozen=True)

@@ -14,10 +14,11 @@ from hand_codesign.core.task import parse_task
 VERSIONED_PACKAGES = ['hand_codesign', 'pybullet', 'cma', 'deap', 'numpy']
 
 
-def run_task(task_yaml, source, seed, iterations, population, world_states, structure=None):
+def run_task(task_yaml, source, seed, iterations, population, world_states, structure=None,
+             horizon=None):
     """Return the Task of a run from its task text and overrides (0 or None keeps the file's)."""
     return with_overrides(parse_task(task_yaml, source=source), seed, iterations, population,
-                          world_states, structure)
+                          world_states, structure, horizon)
 
 
 def load_run_task(path, seed=None, iterations=None, population=None, world_states=None):
@@ -27,8 +28,13 @@ def load_run_task(path, seed=None, iterations=None, population=None, world_state
                           world_states)
 
 
-def with_overrides(task, seed, iterations, population, world_states, structure=None):
-    """Return task with a run's overrides applied (0 or None keeps the task's value)."""
+def with_overrides(task, seed, iterations, population, world_states, structure=None,
+                   horizon=None):
+    """
+    Return task with a run's overrides applied (0 or None keeps the task's value).
+
+    `horizon` (s) is a candidate's sub-problem (Candidate.horizon, core.horizon).
+    """
     changes = {'seed': int(seed)}
     if iterations:
         changes['iterations'] = int(iterations)
@@ -38,6 +44,8 @@ def with_overrides(task, seed, iterations, population, world_states, structure=N
         changes['num_world_states'] = int(world_states)
     if structure:
         changes['structure'] = tuple(int(joints) for joints in structure)
+    if horizon:
+        changes['horizon'] = float(horizon)
     return task.replace(**changes)
 
 

@@ -4,13 +4,16 @@ A run's whole search, driven one batch at a time: one optimization, or the hiera
 The optimizer node, resume and analysis see every task the same way through `Search`:
 `ask()` gives a batch of candidates, `batch_task` the task to evaluate them with (the
 structure and, for the check of a structure's best design, the hierarchy's evaluation world
-states), `tell()` takes id -> objectives, `stop()` says why it ended.
+states), `tell()` takes id -> objectives, `stop()` says why it ended. With
+early_termination.horizon the batch task also holds the sub-problem's horizon (core.horizon),
+which grows from what `tell()` was told and which every candidate of the batch carries.
 """
 
 import dataclasses
 
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.hierarchy import HierarchySearch
+from hand_codesign.core.horizon import Horizon
 from hand_codesign.core.optimizers import make_optimizer
 
 
@@ -23,6 +26,9 @@ class Search:
             self._driver = HierarchySearch(task, first_id=first_id)
         else:
             self._driver = make_optimizer(task, genome_spec(task).size, first_id=first_id)
+        early = task.early_termination
+        self._horizon = (Horizon(task) if early is not None and early.horizon is not None
+                         and task.horizon is None else None)
         self._batch = None
 
     @property
@@ -42,19 +48,43 @@ class Search:
     @property
     def batch_task(self):
         """Return the task with which the batch of `ask()` is evaluated."""
+        if self._horizon is not None:
+            return self._horizon.batch_task
         return self._driver.evaluation_task if self.hierarchical else self.task
+
+    @property
+    def horizon(self):
+        """Return the horizon in seconds of the batch of `ask()`, or None without one."""
+        return None if self._horizon is None else self._horizon.current
+
+    @property
+    def horizons(self):
+        """Return the horizon of every generation told so far (empty without one)."""
+        return [] if self._horizon is None else list(self._horizon.history)
+
+    def horizon_of(self, generation):
+        """Return the horizon (s) generation `generation` was or is evaluated on; 0: none."""
+        if self._horizon is None:
+            return 0.0
+        history = self._horizon.history
+        return history[generation] if generation < len(history) else self._horizon.current
 
     def ask(self):
         """Return the next batch, each candidate with its structure (the same until told)."""
         if self._batch is None:
             structure = self.batch_task.structure
-            self._batch = [dataclasses.replace(candidate, structure=structure)
+            horizon = self.horizon or 0.0
+            self._batch = [dataclasses.replace(candidate, structure=structure, horizon=horizon)
                            for candidate in self._driver.ask()]
         return list(self._batch)
 
     def tell(self, results):
-        """Tell the objectives (id -> vector) of the whole batch."""
+        """Tell the objectives (id -> vector or Evaluation) of the whole batch."""
         self._driver.tell(results)
+        if self._horizon is not None:
+            results = dict(results)
+            self._horizon.told([getattr(results[c.candidate_id], 'objectives',
+                                        results[c.candidate_id]) for c in self.ask()])
         self._batch = None
 
     def stop(self):

@@ -4,13 +4,14 @@ import numpy as np
 
 
 def generation_summary(generation, structure, names, told_ids, objectives, result,
-                       evaluations, wall_time, check=False):
+                       evaluations, wall_time, check=False, horizon=0.0):
     """
     Return the summary of one told batch as a plain dict.
 
     told_ids, objectives: the candidates of the batch and their (batch, num_objectives)
     values as told; result: the optimizer's OptimizerResult after the tell (best so far,
-    Pareto front for MO-CMA-ES); check: the batch was a hierarchy structure's check.
+    Pareto front for MO-CMA-ES); check: the batch was a hierarchy structure's check;
+    horizon: the sub-problem's horizon (s) the batch was evaluated on, 0 for none.
     """
     objectives = np.asarray(objectives, dtype=float).reshape(-1, len(names))
     front = getattr(result, 'pareto_objectives', np.zeros((0, len(names))))
@@ -18,6 +19,7 @@ def generation_summary(generation, structure, names, told_ids, objectives, resul
         'generation': int(generation),
         'structure': tuple(int(joints) for joints in structure),
         'check': bool(check),
+        'horizon': float(horizon),
         'told_ids': [int(candidate_id) for candidate_id in told_ids],
         'told_objectives': objectives,
         'names': tuple(names),
@@ -41,6 +43,8 @@ def progress_line(summary, iterations, rate, seconds_left):
     best = ', '.join(f'{name} {value:.4g}'
                      for name, value in zip(summary['names'], summary['best_objectives']))
     structure = 'x'.join(str(joints) for joints in summary['structure'])
+    if summary.get('horizon'):
+        structure += f', horizon {summary["horizon"]:g} s'
     return (f'generation {summary["generation"] + 1}/{iterations} [{structure}] | '
             f'{summary["evaluations"]} evaluations, {rate:.1f}/s | best fitness '
             f'{summary["best_fitness"]:.4g} ({best}) | about {seconds_left:.0f} s left')

@@ -72,6 +72,10 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
     torque_penalty: {threshold: 0.008, weight: 0.5}     # optional: eq. (2) tau_p and w
     early_termination: {distance: 0.02, angle: 0.3}     # optional: eq. (6) d_s, theta_s;
                                                         # checks_per_second: 10 (optional)
+      # horizon: {start: 0.1, step: 0.1, share: 0.5}    # optional: sub-problems of growing
+      #   horizon (hand_codesign.core.horizon): the first horizon (s, default one check
+      #   interval), how much it grows (s, default one check interval) once `share` (0 to 1,
+      #   default 0.5) of a generation scores at most the margins' score in every objective
     weights: {position: 1.0, orientation: 0.1}          # optional: w_p, w_r of the fitness
     optimizer:
       algorithm: cma                 # cma (weighted sum) | mocma (Pareto front)
@@ -306,12 +310,22 @@ class TorquePenaltySpec:
 
 
 @dataclass(frozen=True)
+class HorizonSpec:
+    """The growing horizon of early_termination.horizon (hand_codesign.core.horizon)."""
+
+    start: float  # s, the first horizon
+    step: float  # s, how much it grows at a time
+    share: float  # of a generation that must track within the margins before it grows
+
+
+@dataclass(frozen=True)
 class EarlyTerminationSpec:
     """Equation (6): stop a rollout when a goal misses by more than d_s or theta_s."""
 
     distance: float  # d_s, m
     angle: float  # theta_s, rad
     checks_per_second: float = 10.0
+    horizon: Optional[HorizonSpec] = None  # sub-problems of growing horizon (horizon.py)
 
 
 @dataclass(frozen=True)
@@ -360,6 +374,9 @@ class Task:
     early_termination: Optional[EarlyTerminationSpec] = None
     hierarchy: Optional[HierarchySpec] = None
     seed_design: Optional[Design] = None
+    # Not in the YAML: the horizon (s) of the sub-problem a candidate is evaluated on, set by
+    # the search (hand_codesign.core.horizon) and carried in its Candidate message; None: none.
+    horizon: Optional[float] = None
     description: str = ''
     source: str = '<task>'
     source_text: str = ''
@@ -826,13 +843,29 @@ class _Reader:
         if value is None:
             return None
         section = self.mapping(value, key, required=('distance', 'angle'),
-                               optional=('checks_per_second',))
+                               optional=('checks_per_second', 'horizon'))
+        rate = self.number(section.get('checks_per_second', 10.0),
+                           _join(key, 'checks_per_second'), positive=True)
         return EarlyTerminationSpec(
             distance=self.number(section['distance'], _join(key, 'distance'), positive=True),
             angle=self.number(section['angle'], _join(key, 'angle'), positive=True,
                               angle=True),
-            checks_per_second=self.number(section.get('checks_per_second', 10.0),
-                                          _join(key, 'checks_per_second'), positive=True))
+            checks_per_second=rate,
+            horizon=self.horizon(section.get('horizon'), _join(key, 'horizon'), 1.0 / rate))
+
+    def horizon(self, value, key, interval):
+        if value is None:
+            return None
+        section = self.mapping(value, key, optional=('start', 'step', 'share'))
+        share = self.number(section.get('share', 0.5), _join(key, 'share'), positive=True)
+        if share > 1:
+            self.fail(_join(key, 'share'), 'a share in (0, 1]', section['share'])
+        return HorizonSpec(
+            start=self.number(section.get('start', interval), _join(key, 'start'),
+                              positive=True),
+            step=self.number(section.get('step', interval), _join(key, 'step'),
+                             positive=True),
+            share=share)
 
     def weights(self, value, key):
         section = self.mapping(value, key, optional=('position', 'orientation'))
@@ -1048,6 +1081,7 @@ def _check_task(task):
     _check_settings(task, fail)
     if task.hierarchy is not None:
         _check_hierarchy(task.hierarchy, fail)
+    _check_horizon(task, fail)
 
 
 def _check_object(task, fail):
@@ -1109,6 +1143,22 @@ def _check_settings(task, fail):
     length = task.morphology.segment_length
     if length.mode == 'bounds' and any(b.lower <= 0 for b in length.values):
         fail('morphology.segment_length.bounds', 'positive lengths')
+
+
+def _check_horizon(task, fail):
+    early = task.early_termination
+    if early is not None and early.horizon is not None and task.hierarchy is not None:
+        fail('early_termination.horizon', 'no horizon in a task with a hierarchy (not '
+             'supported: its structure checks compare full rollouts)')
+    horizon = task.horizon
+    if horizon is None:
+        return
+    if isinstance(horizon, bool) or not isinstance(horizon, (int, float)) \
+            or not math.isfinite(horizon) or horizon <= 0:
+        fail('horizon', f'a positive number of seconds, got {horizon!r}')
+    if early is None:
+        fail('horizon', f'early_termination to evaluate a horizon ({horizon!r} s): its '
+             'margins charge the goals after it')
 
 
 def _check_hierarchy(hierarchy, fail):

@@ -21,6 +21,7 @@ def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, 
         candidate_id=int(candidate.candidate_id),
         evaluator_id=evaluator_id, attempt=int(attempt),
         structure=[int(joints) for joints in structure], genome=float_list(candidate.x),
+        horizon=float(getattr(candidate, 'horizon', 0.0)),
         genome_names=list(genome_names))
 
 
@@ -52,6 +53,7 @@ def summary_message(run_id, summary):
     return GenerationSummary(
         run_id=run_id, generation=int(summary['generation']),
         structure=[int(joints) for joints in summary['structure']], check=summary['check'],
+        horizon=float(summary.get('horizon', 0.0)),
         objective_names=list(summary['names']),
         best=float_list(summary['best']), median=float_list(summary['median']),
         worst=float_list(summary['worst']), pareto_size=int(front.shape[0]),

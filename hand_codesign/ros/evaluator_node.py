@@ -135,8 +135,8 @@ class EvaluatorNode(Node):
                                            f'evaluation failed: {type(error).__name__}: {error}')
             answer.wall_time = time.perf_counter() - started
             if answer.simulated_time > 0:
-                task, _ = self.tasks.get(
-                    (message.run_id, tuple(message.structure), message.world_states), (None, None))
+                task, _ = self.tasks.get((message.run_id, tuple(message.structure),
+                                          message.world_states, message.horizon), (None, None))
                 steps = answer.simulated_time / task.time_step if task else 0.0
                 self.steps_per_second = steps / max(answer.wall_time, 1e-9)
             self.evaluations.publish(answer)
@@ -163,13 +163,14 @@ class EvaluatorNode(Node):
         run = self.runs.get(message.run_id)
         if run is None:
             raise CandidateRejected(f'no RunInfo received for run "{message.run_id}"')
-        key = (message.run_id, tuple(message.structure), message.world_states)
+        key = (message.run_id, tuple(message.structure), message.world_states,
+               message.horizon)
         if key not in self.tasks:
             try:
                 task = run_task(
                     run.task_yaml, f'run {run.run_id} task', run.seed, run.iterations,
                     run.population, message.world_states or run.world_states,
-                    tuple(message.structure) or None)
+                    tuple(message.structure) or None, message.horizon)
                 self.tasks[key] = (task, genome_spec(task))
             except ValueError as error:
                 raise CandidateRejected(f'unusable structure or task: {error}')

@@ -198,11 +198,11 @@ class OptimizerNode(Node):
         self.told += len(self.batch)
         told_ids = [candidate.candidate_id for candidate in self.batch]
         objectives = np.array([self.results[candidate_id] for candidate_id in told_ids])
-        generation = self.batch[0].generation
+        generation, horizon = self.batch[0].generation, self.batch[0].horizon
         self.batch = None
         summary = generation_summary(
             generation, structure, self.task.objective_names, told_ids, objectives,
-            optimizer.result, self.told, time.monotonic() - self.started, checking)
+            optimizer.result, self.told, time.monotonic() - self.started, checking, horizon)
         self.publish(topics.GENERATION_SUMMARY, summary_message(self.run_id, summary))
         if checking:
             self.get_logger().info(
@@ -246,6 +246,7 @@ class OptimizerNode(Node):
                 'stop_reason': stop_reason, 'evaluations': self.told,
                 'structure': list(structure),
                 'best_candidate_id': result.candidate_id, 'generation': result.generation,
+                'horizon': self.search.horizon_of(result.generation),
                 'fitness': result.fitness,
                 'objectives': dict(zip(self.task.objective_names, result.objectives.tolist())),
                 'design': genome_spec(self.task.replace(structure=structure)).design_values(
