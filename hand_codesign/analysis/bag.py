@@ -19,6 +19,13 @@ import pathlib
 import struct
 
 from hand_codesign.analysis import cdr
+from hand_codesign.core.contract import CANDIDATE_TYPE
+from hand_codesign.core.contract import EVALUATION_TYPE
+from hand_codesign.core.contract import EVALUATOR_STATUS_TYPE
+from hand_codesign.core.contract import GENERATION_SUMMARY_TYPE
+from hand_codesign.core.contract import LOOP_TYPES
+from hand_codesign.core.contract import MESSAGES_PACKAGE
+from hand_codesign.core.contract import RUN_INFO_TYPE
 from hand_codesign.core.runs import run_task
 from mcap.records import Schema
 from mcap_ros2.decoder import DecoderFactory
@@ -27,14 +34,6 @@ import yaml
 import zstandard
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
-MESSAGES_PACKAGE = 'hand_codesign_msgs'
-RUN_INFO_TYPE = 'hand_codesign_msgs/msg/RunInfo'
-CANDIDATE_TYPE = 'hand_codesign_msgs/msg/Candidate'
-EVALUATION_TYPE = 'hand_codesign_msgs/msg/Evaluation'
-EVALUATOR_STATUS_TYPE = 'hand_codesign_msgs/msg/EvaluatorStatus'
-GENERATION_SUMMARY_TYPE = 'hand_codesign_msgs/msg/GenerationSummary'
-LOOP_TYPES = (RUN_INFO_TYPE, CANDIDATE_TYPE, EVALUATION_TYPE, EVALUATOR_STATUS_TYPE,
-              GENERATION_SUMMARY_TYPE)
 
 _OP_HEADER = 0x01
 _OP_FOOTER = 0x02
