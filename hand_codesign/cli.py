@@ -13,7 +13,7 @@ from hand_codesign.errors import UserError
 
 # verb -> (module, function, one-line help); the function takes the parsed arguments.
 VERBS = {
-    'run': ('hand_codesign.ros.runner', 'run_command',
+    'run': ('hand_codesign.commands.run', 'run_command',
             'run a co-design as ROS 2 processes and record it to a bag'),
     'analyze': ('hand_codesign.analysis.report', 'analyze_command',
                 'write plots, a CSV and a report of a run from its bag'),
