@@ -11,6 +11,7 @@ PyBullet runs. A hardware evaluator would replace `evaluate` and keep everything
 import collections
 import os
 import socket
+import sys
 import time
 
 from hand_codesign.core.evaluate import evaluate
@@ -24,6 +25,7 @@ from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import EvaluatorStatus
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
@@ -51,11 +53,9 @@ class EvaluatorNode(Node):
         self.work = collections.deque()  # candidates taken; the first is being evaluated
         self.done = 0
         self.steps_per_second = 0.0
-        self.evaluations = self.create_publisher(
-            topics.MESSAGE_TYPES[topics.EVALUATIONS], topics.EVALUATIONS,
-            topics.QOS[topics.EVALUATIONS])
-        self.status = self.create_publisher(
-            EvaluatorStatus, topics.EVALUATOR_STATUS, topics.QOS[topics.EVALUATOR_STATUS])
+        self.evaluations, self.status = (self.create_publisher(
+            topics.MESSAGE_TYPES[name], name, topics.QOS[name])
+            for name in (topics.EVALUATIONS, topics.EVALUATOR_STATUS))
         for name, callback in ((topics.RUN_INFO, self.on_run_info),
                                (topics.CANDIDATES, self.on_candidate)):
             self.create_subscription(topics.MESSAGE_TYPES[name], name, callback,
@@ -132,6 +132,9 @@ def main(args=None):
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except ParameterException as error:
+        rclpy.logging.get_logger('evaluator').error(str(error))
+        return 2
     finally:
         executor.shutdown()
         if node is not None:
@@ -140,7 +143,8 @@ def main(args=None):
             rclpy.logging.get_logger('evaluator').info(
                 f'{node.evaluator_id} published {node.done} evaluations')
         rclpy.try_shutdown()
+    return 0
 
 
 if __name__ == '__main__':
-    main()
+    sys.exit(main())

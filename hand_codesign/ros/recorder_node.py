@@ -20,6 +20,7 @@ from hand_codesign.ros.recording import PARAMETERS
 from hand_codesign.ros.recording import recorder_qos
 from hand_codesign.ros.recording import RecorderError
 import rclpy
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -101,13 +102,12 @@ class Recorder(Node):
 
     def close_bag(self):
         """Close the bag (summary and footer) and log what it holds; idempotent."""
-        if self.bag.closed:
-            return
-        self.bag.close()
-        counts = ', '.join(f'{topic}: {count}' for topic, count in self.bag.message_counts.items())
-        self.get_logger().info(
-            f'closed {self.bag.file_path} with {self.bag.message_count} messages '
-            f'({counts or "none"})')
+        if not self.bag.closed:
+            self.bag.close()
+            counts = ', '.join(f'{topic}: {n}' for topic, n in self.bag.message_counts.items())
+            self.get_logger().info(
+                f'closed {self.bag.file_path} with {self.bag.message_count} messages '
+                f'({counts or "none"})')
 
     def destroy_node(self):
         """Close the bag, then destroy the node."""
@@ -134,8 +134,8 @@ def main(args=None):
         executor = SingleThreadedExecutor()
         executor.add_node(recorder)
         recorder.spin_until_stopped(executor)
-    except RecorderError as error:
-        print(f'recorder: {error}', file=sys.stderr)
+    except (RecorderError, ParameterException) as error:
+        rclpy.logging.get_logger('recorder').error(str(error))
         status = 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
