@@ -25,6 +25,7 @@ with a fake one. Rules the controller adds to the Dispatcher's:
 
 import collections
 import json
+import os
 import time
 
 from hand_codesign.core.dispatch import Dispatcher
@@ -39,6 +40,11 @@ FIRST_EVALUATION_TIMEOUT = 3600.0
 ADAPTIVE_FACTOR = 20.0
 ADAPTIVE_MINIMUM = 60.0
 ADAPTIVE_WINDOW = 50
+
+
+def default_run_id(task):
+    """Return a run id unique on this host: the task's name, the time and the process id."""
+    return f'{task.name}-{time.strftime("%Y%m%d-%H%M%S")}-{os.getpid()}'
 
 
 class RunController:

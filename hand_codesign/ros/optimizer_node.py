@@ -7,11 +7,10 @@ read once, at start. Resuming needs the bag read: `main` takes the function that
 (`load_resume`) from hand_codesign.commands.optimizer, which the `optimizer` executable runs.
 """
 
-import os
 import sys
-import time
 
 from hand_codesign.core.contract import STATUS_REJECTED
+from hand_codesign.core.controller import default_run_id
 from hand_codesign.core.controller import RunController
 from hand_codesign.core.controller import write_result
 from hand_codesign.core.dispatch import DispatchError
@@ -73,11 +72,10 @@ class OptimizerNode(Node):
             task = load_run_task(self.settings['task_file'], None if seed < 0 else seed,
                                  self.settings['iterations'], self.settings['population'],
                                  self.settings['world_states'])
-        run_id = (self.settings['run_id']
-                  or f'{task.name}-{time.strftime("%Y%m%d-%H%M%S")}-{os.getpid()}')
         self.run = RunController(
-            task, run_id, self, resumed, self.settings['heartbeat_timeout'],
-            self.settings['evaluation_timeout'], self.settings['evaluators_expected'])
+            task, self.settings['run_id'] or default_run_id(task), self, resumed,
+            self.settings['heartbeat_timeout'], self.settings['evaluation_timeout'],
+            self.settings['evaluators_expected'])
         self.publishers_ = {name: self.create_publisher(
             topics.MESSAGE_TYPES[name], name, topics.QOS[name]) for name in (
                 topics.RUN_INFO, topics.CANDIDATES, topics.GENERATION_SUMMARY)}
