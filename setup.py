@@ -23,7 +23,7 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-            'optimizer = hand_codesign.ros.optimizer_node:main',
+            'optimizer = hand_codesign.commands.optimizer:main',
             'evaluator = hand_codesign.ros.evaluator_node:main',
             'recorder = hand_codesign.ros.recorder_node:main',
             'codesign = hand_codesign.cli:main',

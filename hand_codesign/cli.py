@@ -15,7 +15,7 @@ from hand_codesign.errors import UserError
 VERBS = {
     'check': ('hand_codesign.check', 'check_command',
               'validate a task file and show what a run of it would do, without simulating'),
-    'run': ('hand_codesign.ros.runner', 'run_command',
+    'run': ('hand_codesign.commands.run', 'run_command',
             'run a co-design as ROS 2 processes and record it to a bag'),
     'analyze': ('hand_codesign.analysis.report', 'analyze_command',
                 'write plots, a CSV and a report of a run from its bag'),

@@ -4,7 +4,7 @@ Disturb a run: publish a foreign run and malformed candidates into the run's ROS
 Started by test_system.py before the run; waits for the run's RunInfo, then publishes a
 RunInfo and a Candidate of a foreign run, a Candidate of the run with a genome of the wrong
 length, one with NaN values, one of an impossible structure, and an Evaluation of the foreign
-run.
+run; it leaves once the malformed candidates are answered.
 """
 
 import sys
@@ -22,6 +22,10 @@ def main():
     node = rclpy.create_node('intruder')
     runs = []
     node.create_subscription(RunInfo, topics.RUN_INFO, runs.append, topics.QOS[topics.RUN_INFO])
+    answered = set()
+    node.create_subscription(Evaluation, topics.EVALUATIONS,
+                             lambda message: answered.add(message.candidate_id),
+                             topics.QOS[topics.EVALUATIONS])
     publishers = {name: node.create_publisher(topics.MESSAGE_TYPES[name], name,
                                               topics.QOS[name])
                   for name in (topics.RUN_INFO, topics.CANDIDATES, topics.EVALUATIONS)}
@@ -46,7 +50,11 @@ def main():
         run_id='foreign-run', candidate_id=0, objectives=[0.0] * size, evaluator_id='intruder'))
     for publisher in publishers.values():
         publisher.wait_for_all_acked()
-    time.sleep(1.0)
+    # stay until an evaluator has answered each malformed candidate of the run
+    malformed = {10**9, 10**9 + 1, 10**9 + 2}
+    deadline = time.monotonic() + 60
+    while malformed - answered and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.1)
     node.destroy_node()
     rclpy.try_shutdown()
     return 0

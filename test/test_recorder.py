@@ -12,7 +12,9 @@ from bag_samples import Process
 from bag_samples import ros_env
 from bag_samples import sample_messages
 import domain_coordinator
+from hand_codesign.analysis.bag import BagError
 from hand_codesign.analysis.bag import read_run
+from hand_codesign.core.contract import RECORDER_READY
 from hand_codesign.ros import topics
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
@@ -51,11 +53,12 @@ PUBLISHER = textwrap.dedent('''
         return any(info.node_name == recorder_name
                    for info in node.get_subscriptions_info_by_topic('/' + topic))
 
-    while not all(recorder_matched(topic) for topic in publishers):
+    # the graph knows the recorder before its readers match our writers: wait for both
+    while not all(recorder_matched(topic) and publisher.get_subscription_count() > 0
+                  for topic, publisher in publishers.items()):
         if time.monotonic() > deadline:
             sys.exit('the recorder never matched')
         time.sleep(0.02)
-    time.sleep(0.2)  # discovery tells the graph before the reader matches our writers
     messages = sample_messages(**eval(sample))
     for topic, message in interleaved(messages):
         publishers[topic].publish(message)
@@ -151,7 +154,7 @@ def test_every_message_is_recorded_and_the_bag_closed_on_signal(
     bag = tmp_path / 'run.mcap'
     recorder = start_recorder(ros_domain, run, bag)
     try:
-        assert recorder.wait_for_line('recorder ready', timeout=60), recorder.output
+        assert recorder.wait_for_line(RECORDER_READY, timeout=60), recorder.output
         publish_sample(ros_domain, run, tmp_path)
         # at once: what the recorder has acknowledged must be in the bag
         recorder.popen.send_signal(stop_signal)
@@ -165,14 +168,29 @@ def test_every_message_is_recorded_and_the_bag_closed_on_signal(
     assert_readers_decode_everything(bag)
 
 
+def wait_until_flushed(bag, run, timeout=60.0):
+    """Wait until the bag file on disk holds every message of the sample run."""
+    expected = sum(len(values) for values in sample_messages(**run['sample']).values())
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            if sum(read_run(bag, run_id=run['sample']['run_id']).message_counts.values()) \
+                    >= expected:
+                return
+        except BagError:
+            pass    # nothing flushed yet
+        time.sleep(0.1)
+    raise AssertionError(f'{bag} did not hold the {expected} messages in {timeout} s')
+
+
 @pytest.mark.timeout(180)
 def test_killed_recorder_leaves_every_flushed_message(ros_domain, run, tmp_path):
     bag = tmp_path / 'killed.mcap'
     recorder = start_recorder(ros_domain, run, bag, 'flush_period:=0.2')
     try:
-        assert recorder.wait_for_line('recorder ready', timeout=60), recorder.output
+        assert recorder.wait_for_line(RECORDER_READY, timeout=60), recorder.output
         publish_sample(ros_domain, run, tmp_path)
-        time.sleep(1.5)
+        wait_until_flushed(bag, run)
         recorder.popen.send_signal(signal.SIGKILL)
         recorder.wait(timeout=30)
     finally:

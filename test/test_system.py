@@ -17,6 +17,7 @@ import threading
 import time
 
 from hand_codesign.analysis.bag import read_run
+from hand_codesign.ros.runner import claimed_domain
 import numpy as np
 import psutil
 import pytest
@@ -27,13 +28,20 @@ BUDGET = ['--iterations', '3', '--popsize', '6', '--world-states', '3', '--seed'
 SUMMARY_FIELDS = ['generation', 'best', 'median', 'worst', 'pareto_front',
                   'best_candidate_id', 'best_objectives', 'best_fitness', 'best_genome',
                   'evaluations', 'final']
-DOMAINS = iter(range(150, 200))
+
+
+def free_domain():
+    """Return a ROS domain that no run of this host holds right now (the runner's own locks)."""
+    with claimed_domain(None) as domain_id:
+        return domain_id
 
 
 def start_run(bag, evaluators, extra=(), budget=BUDGET, domain=None, task=TASK):
+    # without --domain-id the runner claims a free domain itself, also when other test
+    # sessions run on this host at the same time
+    chosen = ['--domain-id', str(domain)] if domain is not None else []
     command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(task),
-               '--evaluators', str(evaluators), '--bag', str(bag),
-               '--domain-id', str(domain or next(DOMAINS)), *budget, *extra]
+               '--evaluators', str(evaluators), '--bag', str(bag), *chosen, *budget, *extra]
     return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)
 
@@ -68,7 +76,13 @@ def test_run_prints_bag_and_best_design(one_evaluator_run):
     assert 'best design: candidate' in output
     assert 'generation 3/3' in output
     result = json.loads((bag / 'result.json').read_text())
-    assert set(result['objectives']) == {'position_1'} or result['objectives']
+    assert list(result['objectives']) == ['position_1']
+    assert result['evaluations'] == 3 * 6 and result['stop_reason'] == 'maxiter=3'
+    table = read_run(bag, run_id=result['run_id']).generation_summaries
+    final = table.row(len(table) - 1)
+    assert final['final'] and result['best_candidate_id'] == final['best_candidate_id']
+    assert result['fitness'] == final['best_fitness']
+    assert [result['objectives']['position_1']] == list(final['best_objectives'])
 
 
 def test_same_summaries_with_one_and_three_evaluators(one_evaluator_run, tmp_path):
@@ -87,10 +101,12 @@ def test_bag_holds_every_published_message(one_evaluator_run):
     assert record.message_counts['/candidates'] == published['candidates']
     assert record.message_counts['/generation_summary'] == published['generation_summary']
     assert record.message_counts['/run_info'] == published['run_info'] == 1
-    evaluator_logs = (bag / 'logs').glob('evaluator-*.log')
-    answered = sum(int(line.split(' published ')[1].split()[0])
-                   for log in evaluator_logs for line in log.read_text().splitlines()
-                   if ' published ' in line)
+    # each evaluator counts its answers in its heartbeats (EvaluatorStatus.evaluations_done)
+    statuses = record.evaluator_status
+    last_count = {}
+    for evaluator, done in zip(statuses['evaluator_id'], statuses['evaluations_done']):
+        last_count[evaluator] = max(int(done), last_count.get(evaluator, 0))
+    answered = sum(last_count.values())
     assert record.message_counts['/evaluations'] == answered == 3 * 6
 
 
@@ -145,7 +161,7 @@ def test_killed_evaluator_does_not_change_the_result(one_evaluator_run, tmp_path
 def test_foreign_and_malformed_messages_do_not_disturb_a_run(one_evaluator_run, tmp_path):
     bag, _ = one_evaluator_run
     disturbed = tmp_path / 'disturbed'
-    domain = next(DOMAINS)
+    domain = free_domain()
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
     # the intruder waits for the run's RunInfo and strikes before the first generation
     intruder = subprocess.Popen([sys.executable, str(ROOT / 'test' / 'intruder.py')], env=env,
@@ -199,7 +215,11 @@ def test_terminated_run_stops_every_process_and_closes_its_bag(tmp_path):
 
 
 def test_nodes_started_by_hand_with_parameter_files(tmp_path):
-    env = dict(os.environ, ROS_DOMAIN_ID=str(next(DOMAINS)))
+    with claimed_domain(None) as domain_id:    # held: no run of this host joins the domain
+        nodes_by_hand(tmp_path, dict(os.environ, ROS_DOMAIN_ID=str(domain_id)))
+
+
+def nodes_by_hand(tmp_path, env):
     bin_folder = pathlib.Path(sys.prefix) / 'bin'
     config = ROOT / 'config'
 

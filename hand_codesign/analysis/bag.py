@@ -21,6 +21,13 @@ import pathlib
 import struct
 
 from hand_codesign.analysis import cdr
+from hand_codesign.core.contract import CANDIDATE_TYPE
+from hand_codesign.core.contract import EVALUATION_TYPE
+from hand_codesign.core.contract import EVALUATOR_STATUS_TYPE
+from hand_codesign.core.contract import GENERATION_SUMMARY_TYPE
+from hand_codesign.core.contract import LOOP_TYPES
+from hand_codesign.core.contract import MESSAGES_PACKAGE
+from hand_codesign.core.contract import RUN_INFO_TYPE
 from hand_codesign.core.runs import run_task
 from mcap.exceptions import EndOfFile
 from mcap.exceptions import McapError
@@ -42,14 +49,6 @@ import yaml
 import zstandard
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
-MESSAGES_PACKAGE = 'hand_codesign_msgs'
-RUN_INFO_TYPE = 'hand_codesign_msgs/msg/RunInfo'
-CANDIDATE_TYPE = 'hand_codesign_msgs/msg/Candidate'
-EVALUATION_TYPE = 'hand_codesign_msgs/msg/Evaluation'
-EVALUATOR_STATUS_TYPE = 'hand_codesign_msgs/msg/EvaluatorStatus'
-GENERATION_SUMMARY_TYPE = 'hand_codesign_msgs/msg/GenerationSummary'
-LOOP_TYPES = (RUN_INFO_TYPE, CANDIDATE_TYPE, EVALUATION_TYPE, EVALUATOR_STATUS_TYPE,
-              GENERATION_SUMMARY_TYPE)
 
 # What a damaged chunk raises while it is decompressed and broken up (lz4 raises RuntimeError).
 _DAMAGE_ERRORS = (McapError, struct.error, ValueError, UnicodeDecodeError, RuntimeError,

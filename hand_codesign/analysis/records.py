@@ -21,15 +21,14 @@ import sys
 
 from hand_codesign.analysis.bag import BagError
 from hand_codesign.analysis.bag import read_run
+from hand_codesign.core.contract import STATUS_NAMES
+from hand_codesign.core.contract import STATUS_OK
 from hand_codesign.core.optimizers import OptimizerError
 from hand_codesign.core.optimizers import replay
 from hand_codesign.core.search import Search
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 import numpy as np
-
-STATUS_OK = 0
-STATUS_NAMES = {0: 'ok', 1: 'rejected'}
 
 
 def beside_bag(bag_path, suffix):

@@ -21,7 +21,6 @@ It prints a summary table to the terminal.
 """
 
 import pathlib
-import sys
 
 from hand_codesign.analysis import records
 from hand_codesign.core.genome import genome_spec
@@ -547,13 +546,3 @@ def plot_pareto(path, fronts, names):
     figure.savefig(path, dpi=100)
     pyplot.close(figure)
     return pathlib.Path(path)
-
-
-def main(argv=None):
-    """Run `analyze` alone (python -m hand_codesign.analysis.report BAG [--out DIR])."""
-    from hand_codesign.cli import main as cli_main
-    return cli_main(['analyze'] + list(sys.argv[1:] if argv is None else argv))
-
-
-if __name__ == '__main__':
-    sys.exit(main())

@@ -7,22 +7,29 @@ import numpy as np
 
 
 def stamp_now(node):
+    """Return the node's clock now as a builtin_interfaces/Time."""
     return node.get_clock().now().to_msg()
 
 
 def float_list(values):
+    """Return values as a flat list of Python floats, as float64[] fields take them."""
     return np.asarray(values, dtype=float).ravel().tolist()
 
 
-def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, attempt):
-    """Return the Candidate message sending an optimizer's candidate to an evaluator."""
+def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, attempt,
+                      world_states=0):
+    """
+    Return the Candidate message sending an optimizer's candidate to an evaluator.
+
+    world_states: 0 evaluates it on the run's worlds; more for a hierarchy structure's check.
+    """
     return Candidate(
         run_id=run_id, generation=int(candidate.generation),
         candidate_id=int(candidate.candidate_id),
         evaluator_id=evaluator_id, attempt=int(attempt),
         structure=[int(joints) for joints in structure], genome=float_list(candidate.x),
         horizon=float(getattr(candidate, 'horizon', 0.0)),
-        genome_names=list(genome_names))
+        genome_names=list(genome_names), world_states=int(world_states))
 
 
 def evaluation_message(candidate, evaluator_id, evaluation):

@@ -1,270 +1,142 @@
 """
-The optimizer node: drives the ask/tell search one generation at a time over ROS 2.
+The optimizer node: the run's RunController (hand_codesign.core.controller) over ROS 2.
 
-It announces the run (RunInfo, latched), waits for evaluators (and a recorder, when asked
-to), sends each candidate to one evaluator through a Dispatcher, collects every evaluation
-by candidate id, tells the optimizer once per generation, publishes a GenerationSummary, and
-ends with the final summary and, when asked, a result file.
+It announces the run (RunInfo, latched), turns heartbeats and evaluations into calls of the
+controller and the controller's candidates and summaries into messages. Its parameters are
+read once, at start. Resuming needs the bag read: `main` takes the function that does it
+(`load_resume`) from hand_codesign.commands.optimizer, which the `optimizer` executable runs.
 """
 
-import collections
-import json
-import os
 import sys
-import time
 
-from hand_codesign.analysis.resume import resume_point
-from hand_codesign.core import genome_spec
-from hand_codesign.core.dispatch import Dispatcher
+from hand_codesign.core.contract import STATUS_REJECTED
+from hand_codesign.core.controller import default_run_id
+from hand_codesign.core.controller import RunController
+from hand_codesign.core.controller import write_result
 from hand_codesign.core.dispatch import DispatchError
-from hand_codesign.core.runs import library_versions
 from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.search import Search
-from hand_codesign.core.summary import generation_summary
-from hand_codesign.core.summary import progress_line
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import candidate_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.conversions import summary_message
-from hand_codesign_msgs.msg import Evaluation
+from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import RunInfo
-import numpy as np
-from rcl_interfaces.msg import ParameterDescriptor
 import rclpy
 from rclpy.duration import Duration
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.task import Future
 
+# name: (default, description, (lowest, highest) or None)
 PARAMETERS = {
-    'task_file': ('', 'task file (YAML) to optimize'),
-    'seed': (-1, "run seed; -1 keeps the task file's"),
-    'iterations': (0, "generations; 0 keeps the task file's"),
-    'population': (0, "candidates per generation; 0 keeps the task file's"),
-    'world_states': (0, "randomized worlds per candidate; 0 keeps the task file's"),
-    'run_id': ('', 'id of the run; empty: made from the time and process id'),
-    'evaluators_expected': (1, 'evaluators to hear from before the first generation'),
-    'subscribers_expected': (0, 'subscriptions besides evaluators (recorders) to wait for'),
-    'heartbeat_timeout': (5.0, 'seconds of evaluator silence before its candidates move on'),
-    'evaluation_timeout': (0.0, 'seconds before a candidate is sent again; 0: adaptive'),
-    'result_file': ('', 'write the final result as JSON here; empty: do not'),
+    'task_file': ('', 'task file (YAML) to optimize', None),
+    'seed': (-1, "run seed; -1 keeps the task file's", (-1, 2**32 - 1)),
+    'iterations': (0, "generations; 0 keeps the task file's", (0, 10**6)),
+    'population': (0, "candidates per generation; 0 keeps the task file's", (0, 10**5)),
+    'world_states': (0, "randomized worlds per candidate; 0 keeps the task file's", (0, 10**6)),
+    'run_id': ('', 'id of the run; empty: made from the time and process id', None),
+    'evaluators_expected': (1, 'evaluators to hear from before starting', (0, 10**4)),
+    'subscribers_expected': (0, 'subscriptions besides evaluators (recorders) to wait for',
+                             (0, 100)),
+    'heartbeat_timeout': (5.0, 'seconds of evaluator silence before its candidates move on',
+                          (0.1, 3600.0)),
+    'evaluation_timeout': (0.0, 'seconds before a candidate is sent again; 0: adaptive',
+                           (0.0, 86400.0)),
+    'result_file': ('', 'write the final result as JSON here; empty: do not', None),
     'resume_bag': ('', 'continue the interrupted run of this bag (its task, seed and budget; '
-                       'task_file and the budget parameters are then ignored)'),
+                       'task_file and the budget parameters are then ignored)', None),
 }
 
 
 class OptimizerNode(Node):
-    """Drive the run's search over the evaluators, one generation at a time."""
+    """Carry the run's RunController over ROS 2 (it is the controller's outbox)."""
 
-    def __init__(self):
+    def __init__(self, load_resume=None):
         super().__init__('optimizer')
-        for name, (default, description) in PARAMETERS.items():
-            self.declare_parameter(name, default, ParameterDescriptor(description=description))
+        self.settings = declare_read_only(self, PARAMETERS)
         self.finished = Future()
-        self.resumed = None
-        if self.param('resume_bag'):
-            # the search replayed from the bag up to the interruption (core.optimizers.replay)
-            self.resumed = resume_point(self.param('resume_bag'))
-            self.task = self.resumed.task
-            self.search = self.resumed.search
-            self.told = self.resumed.evaluations_told
-            self.get_logger().info(self.resumed.describe())
+        resumed = None
+        if self.settings['resume_bag']:  # the run in the bag fixes task, seed and budget
+            if load_resume is None:
+                raise UserError('parameter resume_bag: this entry point cannot read bags; '
+                                'start `python -m hand_codesign.commands.optimizer` (the '
+                                '`optimizer` executable) instead')
+            resumed = load_resume(self.settings['resume_bag'])
+            task = resumed.task
+            self.log(resumed.describe())
         else:
-            seed = self.param('seed')
-            self.task = load_run_task(self.param('task_file'), None if seed < 0 else seed,
-                                      self.param('iterations'), self.param('population'),
-                                      self.param('world_states'))
-            self.search = Search(self.task)
-            self.told = 0
-        self.run_id = (self.param('run_id')
-                       or f'{self.task.name}-{time.strftime("%Y%m%d-%H%M%S")}-{os.getpid()}')
-        self.batch = None
-        self.dispatcher = Dispatcher(self.param('heartbeat_timeout'),
-                                     self.param('evaluation_timeout') or 3600.0)
-        self.adaptive_timeout = self.param('evaluation_timeout') <= 0
-        self.results = {}
-        self.last_summary = None
-        self.wall_times = collections.deque(maxlen=50)
-        self.started = None
-
-        self.publishers_ = {
-            name: self.create_publisher(topics.MESSAGE_TYPES[name], name, topics.QOS[name])
-            for name in (topics.RUN_INFO, topics.CANDIDATES, topics.GENERATION_SUMMARY)}
-        self.create_subscription(Evaluation, topics.EVALUATIONS, self.on_evaluation,
-                                 topics.QOS[topics.EVALUATIONS])
-        self.create_subscription(topics.MESSAGE_TYPES[topics.EVALUATOR_STATUS],
-                                 topics.EVALUATOR_STATUS, self.on_status,
-                                 topics.QOS[topics.EVALUATOR_STATUS])
+            seed = self.settings['seed']
+            task = load_run_task(self.settings['task_file'], None if seed < 0 else seed,
+                                 self.settings['iterations'], self.settings['population'],
+                                 self.settings['world_states'])
+        self.run = RunController(
+            task, self.settings['run_id'] or default_run_id(task), self, resumed,
+            self.settings['heartbeat_timeout'], self.settings['evaluation_timeout'],
+            self.settings['evaluators_expected'])
+        self.publishers_ = {name: self.create_publisher(
+            topics.MESSAGE_TYPES[name], name, topics.QOS[name]) for name in (
+                topics.RUN_INFO, topics.CANDIDATES, topics.GENERATION_SUMMARY)}
         self.published = dict.fromkeys(self.publishers_, 0)
-        self.publish(topics.RUN_INFO, self.run_info())
-        self.get_logger().info(
-            f'run {self.run_id}: task {self.task.name}, {self.task.algorithm}, '
-            f'{self.task.iterations} generations x {self.task.population}, '
-            f'{self.task.num_world_states} world states, seed {self.task.seed}; '
-            f'waiting for {self.param("evaluators_expected")} evaluator(s)')
-        # Evaluations and heartbeats drive the run; the timer only starts it and catches
-        # silent evaluators and overdue candidates, so the node costs no CPU while it waits.
+        for name, callback in ((topics.EVALUATIONS, self.on_evaluation),
+                               (topics.EVALUATOR_STATUS, self.on_status)):
+            self.create_subscription(topics.MESSAGE_TYPES[name], name, callback,
+                                     topics.QOS[name])
+        self.publish(topics.RUN_INFO, RunInfo(**self.run.run_info(), stamp=stamp_now(self)))
+        self.log(self.run.describe())
+        # messages drive the run; the timer starts it and catches silent evaluators
         self.create_timer(0.2, self.tick)
-
-    def param(self, name):
-        return self.get_parameter(name).value
 
     def publish(self, topic, message):
         self.publishers_[topic].publish(message)
         self.published[topic] += 1
 
-    def run_info(self):
-        task = self.task
-        return RunInfo(
-            run_id=self.run_id, task_name=task.name, task_yaml=task.source_text,
-            seed=task.seed, algorithm=task.algorithm, iterations=task.iterations,
-            population=task.population, world_states=task.num_world_states,
-            objective_names=list(task.objective_names), versions=library_versions(),
-            resumed_from=self.resumed.run_id if self.resumed is not None else '',
-            stamp=stamp_now(self))
+    def tick(self):
+        wanted = self.settings['subscribers_expected']
+        self.run.tick(all(publisher.get_subscription_count() >= wanted
+                          for publisher in self.publishers_.values()))
 
     def on_status(self, message):
-        if message.run_id in ('', self.run_id):
-            self.dispatcher.heard_from(message.evaluator_id, message.capacity, time.monotonic())
-            self.advance()
+        self.run.heard_from(message.evaluator_id, message.capacity, message.run_id)
 
     def on_evaluation(self, message):
-        if message.run_id != self.run_id:
-            return
-        if message.status == Evaluation.STATUS_REJECTED:
-            if self.dispatcher.reject(message.candidate_id, message.evaluator_id, message.reason):
-                self.get_logger().warning(
-                    f'candidate {message.candidate_id} rejected by {message.evaluator_id}: '
-                    f'{message.reason}')
-            return
-        if self.dispatcher.complete(message.candidate_id):
-            self.results[message.candidate_id] = np.array(message.objectives, dtype=float)
-            self.wall_times.append(message.wall_time)
-            self.advance()
+        key = message.run_id, message.candidate_id, message.evaluator_id
+        if message.status == STATUS_REJECTED:
+            self.run.rejected(*key, message.reason)
+        else:
+            self.run.evaluated(*key, message.objectives, message.wall_time)
 
-    def ready_to_start(self):
-        now = time.monotonic()
-        enough_evaluators = (len(self.dispatcher.live_evaluators(now))
-                             >= self.param('evaluators_expected'))
-        wanted = self.param('subscribers_expected')
-        matched = all(publisher.get_subscription_count() >= wanted
-                      for publisher in self.publishers_.values())
-        return enough_evaluators and matched
+    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states):
+        self.publish(topics.CANDIDATES, candidate_message(
+            self.run.run_id, candidate, candidate.structure, genome_names, evaluator_id,
+            attempt, world_states))
 
-    def tick(self):
-        if self.started is None and self.ready_to_start():
-            self.started = time.monotonic()
-            self.get_logger().info('evaluators ready, starting')
-        self.advance()
+    def send_summary(self, summary):
+        self.publish(topics.GENERATION_SUMMARY, summary_message(self.run.run_id, summary))
 
-    def advance(self):
-        """Send what can be sent; tell the batch when complete and start the next one."""
-        if self.started is None or self.finished.done():
-            return
-        if self.batch is None:
-            if self.search.stop():
-                self.finish()
-                return
-            self.start_batch()
-        if self.adaptive_timeout and self.wall_times:
-            self.dispatcher.evaluation_timeout = max(60.0, 20.0 * max(self.wall_times))
-        for candidate, evaluator_id, attempt in self.dispatcher.assignments(time.monotonic()):
-            message = candidate_message(self.run_id, candidate, candidate.structure,
-                                        self.batch_genome_names, evaluator_id, attempt)
-            if self.search.checking:
-                message.world_states = self.search.batch_task.num_world_states
-            self.publish(topics.CANDIDATES, message)
-        if self.dispatcher.unfinished == 0:
-            self.tell_batch()
-            self.advance()
+    def log(self, text, level='info'):
+        getattr(self.get_logger(), level)(text)
 
-    def start_batch(self):
-        self.batch = self.search.ask()
-        self.batch_genome_names = genome_spec(self.search.batch_task).names
-        # a resumed run's first batch may be partly evaluated already (in the bag)
-        known = self.resumed.known if self.resumed is not None else {}
-        self.results = {candidate.candidate_id: known[candidate.candidate_id]
-                        for candidate in self.batch if candidate.candidate_id in known}
-        self.dispatcher.add([candidate for candidate in self.batch
-                             if candidate.candidate_id not in self.results])
-
-    def tell_batch(self):
-        checking = self.search.checking
-        structure = self.search.batch_task.structure
-        optimizer = self.search.optimizer
-        self.search.tell(self.results)
-        self.told += len(self.batch)
-        told_ids = [candidate.candidate_id for candidate in self.batch]
-        objectives = np.array([self.results[candidate_id] for candidate_id in told_ids])
-        generation, horizon = self.batch[0].generation, self.batch[0].horizon
-        self.batch = None
-        summary = generation_summary(
-            generation, structure, self.task.objective_names, told_ids, objectives,
-            optimizer.result, self.told, time.monotonic() - self.started, checking, horizon)
-        self.publish(topics.GENERATION_SUMMARY, summary_message(self.run_id, summary))
-        if checking:
-            self.get_logger().info(
-                f'structure {list(structure)}: best design on the evaluation worlds: '
-                + ', '.join(f'{name} {value:.4g}'
-                            for name, value in zip(self.task.objective_names, objectives[0])))
-            return
-        self.last_summary = summary
-        elapsed = time.monotonic() - self.started
-        done = optimizer.generation
-        left = elapsed / done * (self.task.iterations - done)
-        self.get_logger().info(progress_line(summary, self.task.iterations,
-                                             self.told / elapsed, left))
-
-    def finish(self):
-        stop_reason = ', '.join(f'{key}={value}' for key, value in self.search.stop().items())
-        result, structure = self.search.best
-        # after a resume, the last batch may have been a hierarchy check: no generation yet
-        last = self.last_summary or generation_summary(
-            self.search.optimizer.generation, structure, self.task.objective_names,
-            [result.candidate_id], result.objectives.reshape(1, -1), result, self.told, 0.0)
-        summary = dict(last, final=True, stop_reason=stop_reason, told_ids=[],
-                       told_objectives=np.zeros((0, len(self.task.objective_names))),
-                       wall_time=time.monotonic() - self.started, structure=structure,
-                       best_id=result.candidate_id, best_objectives=result.objectives,
-                       best_fitness=result.fitness, best_x=result.x)
-        self.publish(topics.GENERATION_SUMMARY, summary_message(self.run_id, summary))
+    def finish(self, result):
         for publisher in self.publishers_.values():
             publisher.wait_for_all_acked(Duration(seconds=5.0))
-        self.write_result(result, structure, stop_reason)
-        self.get_logger().info(f'run {self.run_id} finished ({stop_reason})')
+        if self.settings['result_file']:
+            write_result(self.settings['result_file'], result, self.published)
         self.finished.set_result(True)
 
-    def write_result(self, result, structure, stop_reason):
-        path = self.param('result_file')
-        if not path:
-            return
-        with open(path, 'w', encoding='utf-8') as stream:
-            json.dump({
-                'run_id': self.run_id, 'task': self.task.name, 'seed': self.task.seed,
-                'stop_reason': stop_reason, 'evaluations': self.told,
-                'structure': list(structure),
-                'best_candidate_id': result.candidate_id, 'generation': result.generation,
-                'horizon': self.search.horizon_of(result.generation),
-                'fitness': result.fitness,
-                'objectives': dict(zip(self.task.objective_names, result.objectives.tolist())),
-                'design': genome_spec(self.task.replace(structure=structure)).design_values(
-                    result.x),
-                'published': self.published,
-            }, stream, indent=2)
 
-
-def main(args=None):
+def main(args=None, load_resume=None):
     rclpy.init(args=args)
     node = None
     try:
-        node = OptimizerNode()
+        node = OptimizerNode(load_resume)
         rclpy.spin_until_future_complete(node, node.finished)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except (TaskError, DispatchError, UserError) as error:
-        print(f'optimizer: error: {error}', file=sys.stderr)
+    except (TaskError, DispatchError, UserError, ParameterException) as error:
+        rclpy.logging.get_logger('optimizer').error(str(error))
         return 2
     finally:
         if node is not None:

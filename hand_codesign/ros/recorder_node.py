@@ -1,61 +1,36 @@
 """
 The recorder node: writes every message of the co-design loop to a rosbag2-compatible MCAP bag.
 
-It subscribes to the loop's topics without decoding (raw CDR), with the QoS of the publishers
-(reliable, transient-local where they offer it) and a keep-all history, so that nothing the
-optimizer or the evaluators published is dropped at the recorder. Every message is written as
-it arrives; the chunk in progress is flushed to disk every ``flush_period`` seconds, so a
-recorder killed with SIGKILL loses at most that much. SIGINT and SIGTERM stop it cleanly: it
-takes whatever has already arrived, then writes the summary and footer.
-
-Once its subscriptions exist it logs ``recorder ready``; a runner waits for that line (or for
-the subscriptions to match) before starting the optimizer.
+It subscribes to the loop's topics without decoding (raw CDR), losslessly (ros.recording has
+its QoS, parameters and bag), and writes every message as it arrives; the chunk in progress is
+flushed every ``flush_period`` seconds, so a recorder killed with SIGKILL loses at most that.
+SIGINT and SIGTERM stop it cleanly: it takes what has already arrived, then closes the bag.
+Once subscribed it logs contract.RECORDER_READY, which a runner waits for.
 """
 
-import datetime
 import signal
 import sys
 import time
 
+from hand_codesign.core.contract import RECORDER_READY
 from hand_codesign.ros import topics
-from hand_codesign.ros.mcap_writer import BagWriteError
-from hand_codesign.ros.mcap_writer import BagWriter
-from hand_codesign.ros.mcap_writer import DefinitionError
-from hand_codesign.ros.mcap_writer import message_definition
-from rcl_interfaces.msg import ParameterDescriptor
+from hand_codesign.ros.parameters import declare_read_only
+from hand_codesign.ros.recording import open_bag
+from hand_codesign.ros.recording import PARAMETERS
+from hand_codesign.ros.recording import recorder_qos
+from hand_codesign.ros.recording import RecorderError
 import rclpy
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy
-from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
 
-READY_MESSAGE = 'recorder ready'
 # How long the recorder keeps taking messages that already arrived once asked to stop, and how
 # long the topics must stay quiet before it closes the bag.
 DRAIN_TIMEOUT = 3.0
 DRAIN_QUIET = 0.2
 SPIN_PERIOD = 0.05
-
-
-class RecorderError(RuntimeError):
-    """A recorder that cannot start: bad parameters or a bag that cannot be created."""
-
-
-def recorder_qos(publisher_qos):
-    """Return the subscription QoS that matches publishers offering publisher_qos, losslessly."""
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_ALL,
-        depth=publisher_qos.depth,
-        reliability=publisher_qos.reliability,
-        durability=publisher_qos.durability,
-    )
-
-
-def default_bag_path():
-    """Return 'hand_codesign_<local date and time>.mcap' in the working directory."""
-    return datetime.datetime.now().strftime('hand_codesign_%Y_%m_%d-%H_%M_%S.mcap')
 
 
 class Recorder(Node):
@@ -64,53 +39,19 @@ class Recorder(Node):
     def __init__(self):
         """Declare the parameters, create the bag and subscribe to every topic to record."""
         super().__init__('recorder')
-        bag_path = self.declare_parameter(
-            'bag_path', '', ParameterDescriptor(
-                description='Bag to write: a path ending in .mcap is one MCAP file, any other '
-                            'path a rosbag2 bag directory (with metadata.yaml). Must not exist. '
-                            'Empty: hand_codesign_<date>-<time>.mcap in the working directory.',
-                read_only=True)).value
-        topic_names = self.declare_parameter(
-            'topics', list(topics.MESSAGE_TYPES), ParameterDescriptor(
-                description='Relative names of the topics to record; each must be a topic of '
-                            'the co-design loop (hand_codesign.ros.topics).',
-                read_only=True)).value
-        self.flush_period = self.declare_parameter(
-            'flush_period', 1.0, ParameterDescriptor(
-                description='Seconds between flushes of the chunk in progress to disk: at most '
-                            'this much is lost if the recorder is killed with SIGKILL.',
-                read_only=True)).value
-        unknown = [name for name in topic_names if name not in topics.MESSAGE_TYPES]
-        if unknown:
-            raise RecorderError(
-                f'parameter topics: {unknown} are not topics of the co-design loop; expected '
-                f'names among {list(topics.MESSAGE_TYPES)}')
-        if self.flush_period <= 0.0:
-            raise RecorderError(
-                f'parameter flush_period: expected a positive number of seconds, got '
-                f'{self.flush_period}')
-        for name in topic_names:
-            try:
-                message_definition(topics.type_name(topics.MESSAGE_TYPES[name]))
-            except DefinitionError as error:
-                raise RecorderError(f'topic {name}: {error}') from None
-        try:
-            self.bag = BagWriter(bag_path or default_bag_path())
-        except BagWriteError as error:
-            raise RecorderError(f'parameter bag_path: {error}') from None
-
+        self.settings = declare_read_only(self, PARAMETERS)
+        self.bag = open_bag(self.settings)
         self._stop_requests = 0
         self._last_message_time = time.monotonic()
         self.subscriptions_by_topic = {}
-        for name in topic_names:
-            message_type = topics.MESSAGE_TYPES[name]
+        for name in self.settings['topics']:
             subscription = self.create_subscription(
-                message_type, name, self._record_callback(name),
+                topics.MESSAGE_TYPES[name], name, self._record_callback(name),
                 recorder_qos(topics.QOS[name]), raw=True)
             self.subscriptions_by_topic[subscription.topic_name] = subscription
-        self.flush_timer = self.create_timer(self.flush_period, self.flush)
+        self.flush_timer = self.create_timer(self.settings['flush_period'], self.flush)
         self.get_logger().info(
-            f'{READY_MESSAGE}: recording {", ".join(self.subscriptions_by_topic)} to '
+            f'{RECORDER_READY}: recording {", ".join(self.subscriptions_by_topic)} to '
             f'{self.bag.file_path}')
 
     def _record_callback(self, name):
@@ -148,14 +89,9 @@ class Recorder(Node):
         """Ask the recorder to stop (signal handler for SIGINT and SIGTERM)."""
         self._stop_requests += 1
 
-    @property
-    def stop_requested(self):
-        """Return whether a stop was requested."""
-        return self._stop_requests > 0
-
     def spin_until_stopped(self, executor):
         """Record until a stop is requested, then take what has arrived and return."""
-        while not self.stop_requested:
+        while not self._stop_requests:
             executor.spin_once(timeout_sec=SPIN_PERIOD)
         self.get_logger().info('stopping: taking the messages that already arrived')
         deadline = time.monotonic() + DRAIN_TIMEOUT
@@ -166,13 +102,12 @@ class Recorder(Node):
 
     def close_bag(self):
         """Close the bag (summary and footer) and log what it holds; idempotent."""
-        if self.bag.closed:
-            return
-        self.bag.close()
-        counts = ', '.join(f'{topic}: {count}' for topic, count in self.bag.message_counts.items())
-        self.get_logger().info(
-            f'closed {self.bag.file_path} with {self.bag.message_count} messages '
-            f'({counts or "none"})')
+        if not self.bag.closed:
+            self.bag.close()
+            counts = ', '.join(f'{topic}: {n}' for topic, n in self.bag.message_counts.items())
+            self.get_logger().info(
+                f'closed {self.bag.file_path} with {self.bag.message_count} messages '
+                f'({counts or "none"})')
 
     def destroy_node(self):
         """Close the bag, then destroy the node."""
@@ -199,8 +134,8 @@ def main(args=None):
         executor = SingleThreadedExecutor()
         executor.add_node(recorder)
         recorder.spin_until_stopped(executor)
-    except RecorderError as error:
-        print(f'recorder: {error}', file=sys.stderr)
+    except (RecorderError, ParameterException) as error:
+        rclpy.logging.get_logger('recorder').error(str(error))
         status = 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

@@ -1,5 +1,8 @@
 """
-Topic names, message types and QoS of the co-design loop, shared by every node.
+Message classes and QoS of the co-design loop's topics, shared by every node.
+
+The names, type names and status codes are spelled once, without ROS, in
+hand_codesign.core.contract; this module adds what needs rclpy and the generated messages.
 
 Every topic of the loop is reliable and transient-local with a deep history, so that no
 candidate or evaluation is lost when a population is larger than a default depth, and a
@@ -7,6 +10,11 @@ subscriber that matches late (a recorder, an evaluator started by hand) still re
 was published before it matched.
 """
 
+from hand_codesign.core.contract import CANDIDATES
+from hand_codesign.core.contract import EVALUATIONS
+from hand_codesign.core.contract import EVALUATOR_STATUS
+from hand_codesign.core.contract import GENERATION_SUMMARY
+from hand_codesign.core.contract import RUN_INFO
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import EvaluatorStatus
@@ -16,12 +24,6 @@ from rclpy.qos import DurabilityPolicy
 from rclpy.qos import HistoryPolicy
 from rclpy.qos import QoSProfile
 from rclpy.qos import ReliabilityPolicy
-
-RUN_INFO = 'run_info'
-CANDIDATES = 'candidates'
-EVALUATIONS = 'evaluations'
-EVALUATOR_STATUS = 'evaluator_status'
-GENERATION_SUMMARY = 'generation_summary'
 
 # Deep enough for several generations of the largest population of Table I (250).
 HISTORY_DEPTH = 4096

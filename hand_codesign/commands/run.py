@@ -1,0 +1,134 @@
+"""
+`hand-codesign run`: a co-design as separate processes, fresh or resumed from a bag.
+
+This command checks the flags, loads the run's task (from the task file, or for `--resume`
+from the bag through hand_codesign.analysis.resume), lets hand_codesign.ros.runner start and
+stop the processes, and prints where the bag and the best design are.
+"""
+
+import contextlib
+import json
+import pathlib
+import signal
+import sys
+import time
+
+from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.task import TaskError
+from hand_codesign.errors import UserError
+from hand_codesign.ros.runner import claimed_domain
+from hand_codesign.ros.runner import System
+
+OPTIMIZER_MODULE = 'hand_codesign.commands.optimizer'
+
+
+def run_command(arguments):
+    """Run a co-design as processes; return the exit code."""
+    task = check_arguments(arguments)
+    bag = pathlib.Path(arguments.bag or default_bag_path(task.name)).resolve()
+    if bag.exists():
+        raise UserError(f'--bag {bag}: already exists; choose a new path')
+    if bag.suffix == '.mcap':
+        raise UserError(f'--bag {bag}: give a folder (the run writes its bag, result.json and '
+                        'logs there), not a .mcap file')
+    with claimed_domain(arguments.domain_id) as domain_id:
+        system = System(bag, domain_id, quiet=arguments.quiet)
+        say = system.say
+        source = arguments.task or f'resumed from {arguments.resume}'
+        say(f'run: task {task.name} ({source}), evaluators: {arguments.evaluators}, '
+            f'ROS_DOMAIN_ID={domain_id}, bag {bag}')
+        try:
+            with termination_as_interrupt():
+                code = system.run(arguments.evaluators, OPTIMIZER_MODULE,
+                                  optimizer_parameters(arguments, task, bag))
+        except KeyboardInterrupt:
+            say('interrupted: stopping the evaluators and closing the bag')
+            system.stop_all()
+            print(f'bag (interrupted run): {bag}')
+            return 130
+        finally:
+            system.stop_all()
+    if code != 0:
+        print(f'bag: {bag}', file=sys.stderr)
+        return code
+    print(f'bag: {bag}')
+    print(f'best design: {best_design_line(bag / "result.json")}')
+    return 0
+
+
+def optimizer_parameters(arguments, task, bag):
+    """Return the optimizer node's parameters for this run."""
+    parameters = {
+        'evaluators_expected': max(1, arguments.evaluators), 'subscribers_expected': 1,
+        'result_file': bag / 'result.json'}
+    if arguments.resume:
+        parameters['resume_bag'] = pathlib.Path(arguments.resume).resolve()
+    else:
+        parameters.update({
+            'task_file': pathlib.Path(arguments.task).resolve(), 'seed': task.seed,
+            'iterations': task.iterations, 'population': task.population,
+            'world_states': task.num_world_states})
+    return parameters
+
+
+@contextlib.contextmanager
+def termination_as_interrupt():
+    """Treat SIGTERM and SIGHUP like Ctrl-C, so that the processes of the run are stopped."""
+    def interrupt(signal_number, frame):
+        raise KeyboardInterrupt
+
+    previous = {number: signal.signal(number, interrupt)
+                for number in (signal.SIGTERM, signal.SIGHUP)}
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+
+def check_arguments(arguments):
+    """Return the run's Task, or raise UserError naming the bad flag or file."""
+    if arguments.resume:
+        return resumed_task(arguments)
+    if not arguments.task:
+        raise UserError('--task FILE is required (e.g. config/tasks/task5.yaml)')
+    if arguments.evaluators < 0:
+        raise UserError(f'--evaluators: expected 0 or more, got {arguments.evaluators}')
+    for flag in ('iterations', 'popsize', 'world_states'):
+        value = getattr(arguments, flag)
+        if value is not None and value < 1:
+            raise UserError(f'--{flag.replace("_", "-")}: expected a positive number, '
+                            f'got {value}')
+    try:
+        return load_run_task(arguments.task, arguments.seed, arguments.iterations,
+                             arguments.popsize, arguments.world_states)
+    except TaskError as error:
+        raise UserError(str(error))
+
+
+def resumed_task(arguments):
+    """Return the Task of the interrupted run in --resume's bag; it fixes task and budget."""
+    given = [flag for flag in ('task', 'seed', 'iterations', 'popsize', 'world_states')
+             if getattr(arguments, flag) is not None]
+    if given:
+        raise UserError('--resume takes the task, seed and budget from the bag; drop '
+                        + ', '.join('--' + flag.replace('_', '-') for flag in given))
+    from hand_codesign.analysis.resume import resume_point
+    point = resume_point(arguments.resume)
+    if not arguments.quiet:
+        print(point.describe(), flush=True)
+    return point.task
+
+
+def default_bag_path(task_name):
+    """Return bags/<task>-<date>-<time>, where a run writes when --bag is not given."""
+    return f'bags/{task_name}-{time.strftime("%Y%m%d-%H%M%S")}'
+
+
+def best_design_line(result_file):
+    """Return the line telling the user about the best design of a run's result.json."""
+    result = json.loads(result_file.read_text())
+    objectives = ', '.join(f'{name} {value:.4g}' for name, value in result['objectives'].items())
+    return (f'candidate {result["best_candidate_id"]} of generation {result["generation"]}, '
+            f'fitness {result["fitness"]:.4g} ({objectives}); '
+            f'{len(result["design"])} parameters in {result_file}')

@@ -1,0 +1,215 @@
+"""
+The run of a co-design as events and a clock: what the optimizer node decides, without ROS.
+
+A RunController owns the run's Search, a Dispatcher, the results of the batch in flight and
+the summaries. It is driven by what the optimizer hears (`heard_from` a heartbeat,
+`evaluated`, `rejected`) and by `tick()`, and answers through an outbox with four methods:
+
+    send_candidate(candidate, evaluator_id, attempt, genome_names, world_states)
+    send_summary(summary)          # a core.summary mapping; the last one has final=True
+    log(text, level='info')        # a line for whoever watches the run ('warning')
+    finish(result)                 # the run ended; result is the record of `result.json`
+
+The clock (a function returning seconds, `time.monotonic` by default) is the only source of
+time, so a test drives a whole run, heartbeats, deadlines and silent evaluators included,
+with a fake one. Rules the controller adds to the Dispatcher's:
+
+- the run starts once `evaluators_expected` evaluators are alive and the node says that its
+  subscribers (recorders) are there; until then nothing is sent;
+- a batch is told to the search when every candidate of it has its first accepted answer;
+- with `evaluation_timeout` 0 the deadline adapts: 20 times the slowest of the last 50
+  evaluations, at least 60 s (3600 s until the first one comes back);
+- a resumed run (core.resume.ResumePoint) starts from the rebuilt search and does not send the
+  candidates whose objectives its record already holds.
+"""
+
+import collections
+import json
+import os
+import time
+
+from hand_codesign.core.dispatch import Dispatcher
+from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.runs import library_versions
+from hand_codesign.core.search import Search
+from hand_codesign.core.summary import generation_summary
+from hand_codesign.core.summary import progress_line
+import numpy as np
+
+FIRST_EVALUATION_TIMEOUT = 3600.0
+ADAPTIVE_FACTOR = 20.0
+ADAPTIVE_MINIMUM = 60.0
+ADAPTIVE_WINDOW = 50
+
+
+def default_run_id(task):
+    """Return a run id unique on this host: the task's name, the time and the process id."""
+    return f'{task.name}-{time.strftime("%Y%m%d-%H%M%S")}-{os.getpid()}'
+
+
+class RunController:
+    """Drive a run's search over evaluators, one batch at a time (see the module doc)."""
+
+    def __init__(self, task, run_id, outbox, resumed=None, heartbeat_timeout=5.0,
+                 evaluation_timeout=0.0, evaluators_expected=1, clock=time.monotonic):
+        self.task = task
+        self.run_id = run_id
+        self.outbox = outbox
+        self.resumed = resumed
+        self.search = resumed.search if resumed is not None else Search(task)
+        self.told = resumed.evaluations_told if resumed is not None else 0
+        self.evaluators_expected = evaluators_expected
+        self.clock = clock
+        self.dispatcher = Dispatcher(heartbeat_timeout,
+                                     evaluation_timeout or FIRST_EVALUATION_TIMEOUT)
+        self.adaptive_timeout = evaluation_timeout <= 0
+        self.wall_times = collections.deque(maxlen=ADAPTIVE_WINDOW)
+        self.batch = None
+        self.genome_names = ()
+        self.results = {}
+        self.last_summary = None
+        self.started = None
+        self.finished = False
+
+    def run_info(self):
+        """Return the fields of the run's RunInfo announcement (all but its stamp)."""
+        task = self.task
+        return {
+            'run_id': self.run_id, 'task_name': task.name, 'task_yaml': task.source_text,
+            'seed': task.seed, 'algorithm': task.algorithm, 'iterations': task.iterations,
+            'population': task.population, 'world_states': task.num_world_states,
+            'objective_names': list(task.objective_names), 'versions': library_versions(),
+            'resumed_from': self.resumed.run_id if self.resumed is not None else ''}
+
+    def describe(self):
+        """Return the line announcing the run."""
+        task = self.task
+        return (f'run {self.run_id}: task {task.name}, {task.algorithm}, '
+                f'{task.iterations} generations x {task.population}, '
+                f'{task.num_world_states} world states, seed {task.seed}; '
+                f'waiting for {self.evaluators_expected} evaluator(s)')
+
+    def ours(self, run_id):
+        return run_id == self.run_id
+
+    def heard_from(self, evaluator_id, capacity, run_id=''):
+        """Take a heartbeat of an evaluator serving this run ('' serves every run)."""
+        if run_id in ('', self.run_id):
+            self.dispatcher.heard_from(evaluator_id, capacity, self.clock())
+            self.advance()
+
+    def evaluated(self, run_id, candidate_id, evaluator_id, objectives, wall_time):
+        """Take an evaluation; the first answer for a candidate wins, later ones are ignored."""
+        if self.ours(run_id) and self.dispatcher.complete(candidate_id):
+            self.results[candidate_id] = np.array(objectives, dtype=float)
+            self.wall_times.append(wall_time)
+            self.advance()
+
+    def rejected(self, run_id, candidate_id, evaluator_id, reason):
+        """Take a rejection: the candidate goes to an evaluator that has not refused it."""
+        if self.ours(run_id) and self.dispatcher.reject(candidate_id, evaluator_id, reason):
+            self.outbox.log(f'candidate {candidate_id} rejected by {evaluator_id}: {reason}',
+                            'warning')
+
+    def tick(self, subscribers_ready=True):
+        """Start the run when ready, then catch silent evaluators and overdue candidates."""
+        if self.started is None and subscribers_ready and self._enough_evaluators():
+            self.started = self.clock()
+            self.outbox.log('evaluators ready, starting')
+        self.advance()
+
+    def _enough_evaluators(self):
+        return len(self.dispatcher.live_evaluators(self.clock())) >= self.evaluators_expected
+
+    def advance(self):
+        """Send what can be sent; tell the batch when complete and start the next one."""
+        while self.started is not None and not self.finished:
+            if self.batch is None:
+                if self.search.stop():
+                    self._finish()
+                    return
+                self._start_batch()
+            if self.adaptive_timeout and self.wall_times:
+                self.dispatcher.evaluation_timeout = max(
+                    ADAPTIVE_MINIMUM, ADAPTIVE_FACTOR * max(self.wall_times))
+            world_states = self.search.batch_task.num_world_states if self.search.checking else 0
+            for candidate, evaluator_id, attempt in self.dispatcher.assignments(self.clock()):
+                self.outbox.send_candidate(candidate, evaluator_id, attempt, self.genome_names,
+                                           world_states)
+            if self.dispatcher.unfinished:
+                return
+            self._tell_batch()
+
+    def _start_batch(self):
+        self.batch = self.search.ask()
+        self.genome_names = genome_spec(self.search.batch_task).names
+        # a resumed run's first batch may be partly evaluated already (in its record)
+        known = self.resumed.known if self.resumed is not None else {}
+        self.results = {candidate.candidate_id: known[candidate.candidate_id]
+                        for candidate in self.batch if candidate.candidate_id in known}
+        self.dispatcher.add([candidate for candidate in self.batch
+                             if candidate.candidate_id not in self.results])
+
+    def _tell_batch(self):
+        checking = self.search.checking
+        structure = self.search.batch_task.structure
+        optimizer = self.search.optimizer
+        self.search.tell(self.results)
+        self.told += len(self.batch)
+        told_ids = [candidate.candidate_id for candidate in self.batch]
+        objectives = np.array([self.results[candidate_id] for candidate_id in told_ids])
+        generation, horizon = self.batch[0].generation, self.batch[0].horizon
+        self.batch = None
+        elapsed = self.clock() - self.started
+        summary = generation_summary(
+            generation, structure, self.task.objective_names, told_ids, objectives,
+            optimizer.result, self.told, elapsed, checking, horizon)
+        self.outbox.send_summary(summary)
+        if checking:
+            self.outbox.log(
+                f'structure {list(structure)}: best design on the evaluation worlds: '
+                + ', '.join(f'{name} {value:.4g}'
+                            for name, value in zip(self.task.objective_names, objectives[0])))
+            return
+        self.last_summary = summary
+        done = optimizer.generation
+        left = elapsed / done * (self.task.iterations - done)
+        rate = self.told / max(elapsed, 1e-9)  # a fake clock may not have moved
+        self.outbox.log(progress_line(summary, self.task.iterations, rate, left))
+
+    def _finish(self):
+        self.finished = True
+        stop_reason = ', '.join(f'{key}={value}' for key, value in self.search.stop().items())
+        result, structure = self.search.best
+        names = self.task.objective_names
+        # after a resume, the last batch may have been a hierarchy check: no generation yet
+        last = self.last_summary or generation_summary(
+            self.search.optimizer.generation, structure, names, [result.candidate_id],
+            result.objectives.reshape(1, -1), result, self.told, 0.0)
+        self.outbox.send_summary(dict(
+            last, final=True, stop_reason=stop_reason, told_ids=[],
+            told_objectives=np.zeros((0, len(names))), wall_time=self.clock() - self.started,
+            structure=structure, best_id=result.candidate_id,
+            best_objectives=result.objectives, best_fitness=result.fitness,
+            best_x=result.x))
+        self.outbox.log(f'run {self.run_id} finished ({stop_reason})')
+        self.outbox.finish(self._result(result, structure, stop_reason))
+
+    def _result(self, result, structure, stop_reason):
+        return {
+            'run_id': self.run_id, 'task': self.task.name, 'seed': self.task.seed,
+            'stop_reason': stop_reason, 'evaluations': self.told,
+            'structure': list(structure),
+            'best_candidate_id': result.candidate_id, 'generation': result.generation,
+            'horizon': self.search.horizon_of(result.generation),
+            'fitness': result.fitness,
+            'objectives': dict(zip(self.task.objective_names, result.objectives.tolist())),
+            'design': genome_spec(self.task.replace(structure=structure)).design_values(
+                result.x),
+        }
+
+
+def write_result(path, result, published):
+    """Write a run's result (RunController's finish) and the messages it published as JSON."""
+    with open(path, 'w', encoding='utf-8') as stream:
+        json.dump(dict(result, published=published), stream, indent=2)

@@ -1,0 +1,30 @@
+"""Node parameters declared from one table, read-only and with their ranges, read once."""
+
+from rcl_interfaces.msg import FloatingPointRange
+from rcl_interfaces.msg import IntegerRange
+from rcl_interfaces.msg import ParameterDescriptor
+
+
+def descriptor(default, description, bounds):
+    """Return the read-only ParameterDescriptor of a parameter, with its range if bounded."""
+    result = ParameterDescriptor(description=description, read_only=True)
+    if bounds is not None and isinstance(default, float):
+        result.floating_point_range = [FloatingPointRange(
+            from_value=float(bounds[0]), to_value=float(bounds[1]), step=0.0)]
+    elif bounds is not None:
+        result.integer_range = [IntegerRange(
+            from_value=int(bounds[0]), to_value=int(bounds[1]), step=1)]
+    return result
+
+
+def declare_read_only(node, table):
+    """
+    Declare the parameters of table (name -> (default, description, bounds or None)).
+
+    Return {name: value}: the node reads its parameters once, here, so that what it runs with
+    is what was given at start. A value outside its range raises rclpy's
+    InvalidParameterValueException, naming the parameter and the range.
+    """
+    return {name: node.declare_parameter(name, default,
+                                         descriptor(default, description, bounds)).value
+            for name, (default, description, bounds) in table.items()}

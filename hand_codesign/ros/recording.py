@@ -1,0 +1,69 @@
+"""
+What the recorder node needs besides ROS callbacks: its parameters' checks, its QoS, its bag.
+
+The recorder subscribes with the QoS of the publishers (reliable, transient-local where they
+offer it) and a keep-all history, so that nothing the optimizer or the evaluators published is
+dropped at the recorder.
+"""
+
+import datetime
+
+from hand_codesign.ros import topics
+from hand_codesign.ros.mcap_writer import BagWriteError
+from hand_codesign.ros.mcap_writer import BagWriter
+from hand_codesign.ros.mcap_writer import DefinitionError
+from hand_codesign.ros.mcap_writer import message_definition
+from rclpy.qos import HistoryPolicy
+from rclpy.qos import QoSProfile
+
+# name: (default, description, (lowest, highest) or None), for ros.parameters
+PARAMETERS = {
+    'bag_path': ('', 'Bag to write: a path ending in .mcap is one MCAP file, any other path a '
+                     'rosbag2 bag directory (with metadata.yaml). Must not exist. Empty: '
+                     'hand_codesign_<date>-<time>.mcap in the working directory.', None),
+    'topics': (list(topics.MESSAGE_TYPES), 'Relative names of the topics to record; each '
+               'must be a topic of the co-design loop (hand_codesign.ros.topics).', None),
+    'flush_period': (1.0, 'Seconds between flushes of the chunk in progress to disk: at most '
+                          'this much is lost if the recorder is killed with SIGKILL.', None),
+}
+
+
+class RecorderError(RuntimeError):
+    """A recorder that cannot start: bad parameters or a bag that cannot be created."""
+
+
+def recorder_qos(publisher_qos):
+    """Return the subscription QoS that matches publishers offering publisher_qos, losslessly."""
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_ALL,
+        depth=publisher_qos.depth,
+        reliability=publisher_qos.reliability,
+        durability=publisher_qos.durability,
+    )
+
+
+def default_bag_path():
+    """Return 'hand_codesign_<local date and time>.mcap' in the working directory."""
+    return datetime.datetime.now().strftime('hand_codesign_%Y_%m_%d-%H_%M_%S.mcap')
+
+
+def open_bag(settings):
+    """Check the recorder's parameters and return a new BagWriter; raise RecorderError."""
+    unknown = [name for name in settings['topics'] if name not in topics.MESSAGE_TYPES]
+    if unknown:
+        raise RecorderError(
+            f'parameter topics: {unknown} are not topics of the co-design loop; expected '
+            f'names among {list(topics.MESSAGE_TYPES)}')
+    if settings['flush_period'] <= 0.0:
+        raise RecorderError(
+            f'parameter flush_period: expected a positive number of seconds, got '
+            f'{settings["flush_period"]}')
+    for name in settings['topics']:
+        try:
+            message_definition(topics.type_name(topics.MESSAGE_TYPES[name]))
+        except DefinitionError as error:
+            raise RecorderError(f'topic {name}: {error}') from None
+    try:
+        return BagWriter(settings['bag_path'] or default_bag_path())
+    except BagWriteError as error:
+        raise RecorderError(f'parameter bag_path: {error}') from None

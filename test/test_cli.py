@@ -1,0 +1,67 @@
+"""The `hand-codesign` command: its verbs, and bad flags answered with one clear line."""
+
+import pathlib
+import subprocess
+import sys
+
+from hand_codesign import cli
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+TASK = str(ROOT / 'config' / 'tasks' / 'task5.yaml')
+
+
+def run(capsys, *argv):
+    """Return (exit code, stdout, stderr) of the CLI called in this process."""
+    code = cli.main([str(argument) for argument in argv])
+    output = capsys.readouterr()
+    return code, output.out, output.err
+
+
+def test_help_lists_every_verb():
+    output = subprocess.run([sys.executable, '-m', 'hand_codesign.cli', '--help'],
+                            capture_output=True, text=True, check=True).stdout
+    for verb in cli.VERBS:
+        assert verb in output
+
+
+def test_every_verb_loads_its_command():
+    for verb in cli.VERBS:
+        assert callable(cli.load_verb(verb))
+
+
+@pytest.mark.parametrize('flags, message', [
+    ([], '--task FILE is required'),
+    (['--task', TASK, '--evaluators', '-1'], '--evaluators: expected 0 or more, got -1'),
+    (['--task', TASK, '--popsize', '0'], '--popsize: expected a positive number, got 0'),
+    (['--task', TASK, '--world-states', '-2'], '--world-states: expected a positive number'),
+    (['--task', 'no/such/task.yaml'], 'no/such/task.yaml'),
+    (['--resume', 'some-bag', '--seed', '3', '--popsize', '4'],
+     '--resume takes the task, seed and budget from the bag; drop --seed, --popsize'),
+])
+def test_bad_run_flags_are_one_line_errors(capsys, flags, message):
+    code, out, err = run(capsys, 'run', *flags)
+    assert code == 2 and out == ''
+    assert err.startswith('hand-codesign run: error: ') and message in err
+    assert len(err.strip().splitlines()) == 1 and 'Traceback' not in err
+
+
+def test_run_refuses_a_bag_that_exists_or_is_a_file(capsys, tmp_path):
+    code, _, err = run(capsys, 'run', '--task', TASK, '--bag', tmp_path)
+    assert code == 2 and 'already exists; choose a new path' in err
+    code, _, err = run(capsys, 'run', '--task', TASK, '--bag', tmp_path / 'run.mcap')
+    assert code == 2 and 'give a folder' in err
+
+
+@pytest.mark.parametrize('verb', ['analyze', 'replay', 'export', 'robustness'])
+def test_bag_verbs_name_a_missing_bag(capsys, tmp_path, verb):
+    extra = ['--out', tmp_path / 'out'] if verb == 'export' else []
+    code, _, err = run(capsys, verb, tmp_path / 'missing-bag', *extra)
+    assert code == 2 and err.startswith(f'hand-codesign {verb}: error: ')
+    assert 'missing-bag' in err and 'Traceback' not in err
+
+
+def test_a_missing_verb_is_an_argparse_error():
+    process = subprocess.run([sys.executable, '-m', 'hand_codesign.cli'], capture_output=True,
+                             text=True)
+    assert process.returncode == 2 and 'VERB' in process.stderr
