@@ -77,14 +77,18 @@ def test_slerp():
         [math.pi / 8, math.pi / 4, 3 * math.pi / 8])
 
 
-def small_task(position_goals, orientation_goals, early_termination=None, relative=False):
-    """Return Task 5 turned into a 1 s task with the given goals."""
+def small_task(position_goals, orientation_goals, early_termination=None, relative=False,
+               symmetry=None):
+    """Return Task 5 turned into a 1 s task with the given goals (every axis, every turn)."""
     document = yaml.safe_load((TASKS / 'task5.yaml').read_text())
     document['duration'] = 1.0
     document['policy']['duration'] = 1.0
     document['goals']['position'] = position_goals
     document['goals']['orientation'] = orientation_goals
     document['goals']['relative_to_start'] = relative
+    document['goals'].pop('orientation_symmetry')
+    if symmetry is not None:
+        document['goals']['orientation_symmetry'] = symmetry
     if early_termination is not None:
         document['early_termination'] = early_termination
     return parse_task(yaml.safe_dump(document), source='small.yaml')
