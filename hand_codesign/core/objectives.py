@@ -154,7 +154,8 @@ class GoalSchedule:
     (bool per check: an early-termination check); num_objectives, objective_names;
     objective_start_times t(o), objective_end_times T(o), objective_sizes |o|; margins
     (s_o per objective, or None without early termination); last_position and
-    last_orientation (the final goals, or the start pose for a kind without goals).
+    last_orientation (the final goals, or the start pose for a kind without goals, which
+    pose_errors scores 0).
     """
 
     def __init__(self, task: Task):
@@ -205,8 +206,10 @@ class GoalSchedule:
                                       if task.goals.position else start.position)
         self.last_orientation = np.array(task.goals.orientation[-1].orientation
                                          if task.goals.orientation else start.orientation)
+        # pose_errors measures the last position goal's axes; none for a task without one
         self.last_mask = (_axes_mask(task.goals.position[-1].axes) if task.goals.position
-                          else np.ones(3))
+                          else np.zeros(3))
+        self.has_orientation_goals = bool(task.goals.orientation)
         self.symmetries = _symmetry_turns(task.goals.orientation_symmetry)
         self.relative_to_start = task.goals.relative_to_start
         self.start_position = np.array(start.position, dtype=float)
@@ -378,16 +381,21 @@ class GoalSchedule:
         return np.where(end <= stop_time + 1e-12, sums / self.objective_sizes, cut)
 
     def pose_errors(self, position, orientation, start=None):
-        """Return (distance, angle) of a pose from the last goals (of the world of `start`)."""
+        """
+        Return (distance, angle) of a pose from the last goals (of the world of `start`).
+
+        A kind of goal the task does not have (Task 6's "final position irrelevant") is 0.
+        """
         transform = self.start_transform(start)
         if transform is not None:
             position, orientation = _to_nominal(transform, position, orientation)
         turns = self.world_symmetries(transform)
         if turns is not None:
             orientation = _nearest_turn(orientation, turns, self.last_orientation)
+        angle = (float(orientation_angle(orientation, self.last_orientation))
+                 if self.has_orientation_goals else 0.0)
         return (float(position_distance(position, self.last_position, self.distance,
-                                        self.last_mask)),
-                float(orientation_angle(orientation, self.last_orientation)))
+                                        self.last_mask)), angle)
 
     def world_symmetries(self, transform):
         """
