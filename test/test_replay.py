@@ -44,7 +44,8 @@ def test_a_changed_recording_is_reported_loudly(real_run, tmp_path, capsys):
 
     def tamper(topic, message):
         if topic == topics.EVALUATIONS and message.candidate_id == best:
-            message.objectives = [np.nextafter(message.objectives[0], 1.0)]
+            message.objectives = ([np.nextafter(message.objectives[0], 1.0)]
+                                  + list(message.objectives[1:]))
             return True
         return False
 
