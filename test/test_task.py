@@ -157,7 +157,7 @@ BAD_VALUES = [
     ('morphology.friction', {'delta': [-0.1, 0.1]}, 'expected a seed_design'),
     ('goals.position', [{'time': 1.5, 'position': [0, 0, 0.02], 'axes': ['x', 'w'],
                          'trajectory': False}],
-     "goals.position[0].axes: expected a non-empty list of distinct world axes from x, y, z, "
+     'goals.position[0].axes: expected a non-empty list of distinct world axes from x, y, z, '
      "e.g. [x, y], got ['x', 'w']"),
     ('goals.position', [{'time': 1.5, 'position': [0, 0, 0.02], 'axes': ['x', 'x'],
                          'trajectory': False}], 'axes: expected a non-empty list of distinct'),
