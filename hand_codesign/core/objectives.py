@@ -342,15 +342,14 @@ class GoalSchedule:
     def sample_errors(self, positions, orientations, num_recorded):
         """Return (objective index, error) arrays of the samples of the first checks."""
         parts = []
-        for table, values, measure in (
-                (self._position, positions,
-                 lambda a, b, count: position_distance(a, b, self.distance,
-                                                       self._position['mask'][:count])),
-                (self._orientation, orientations, lambda a, b, count: orientation_angle(a, b))):
+        for table, values in ((self._position, positions), (self._orientation, orientations)):
             count = int(np.searchsorted(table['check'], num_recorded, side='left'))
-            checks = table['check'][:count]
-            errors = measure(np.asarray(values)[checks], table['target'][:count], count) \
-                if count else np.zeros(0)
+            measured = np.asarray(values)[table['check'][:count]]
+            if table is self._position:
+                errors = position_distance(measured, table['target'][:count], self.distance,
+                                           table['mask'][:count])
+            else:
+                errors = orientation_angle(measured, table['target'][:count])
             parts.append((table['objective'][:count], errors))
         return (np.concatenate([parts[0][0], parts[1][0]]),
                 np.concatenate([parts[0][1], parts[1][1]]))
