@@ -97,7 +97,7 @@ def plain_loop(task, known=None):
 def test_a_run_reaches_the_result_of_a_plain_ask_tell_loop(tmp_path):
     task, clock = task5(), Clock()
     controller, outbox = start(task, clock)
-    answer_everything(controller, outbox, 1, clock)
+    answer_everything(controller, outbox, len(task.objective_names), clock)
     expected, structure = plain_loop(task).best
     result = outbox.result
     assert result['best_candidate_id'] == expected.candidate_id
@@ -198,7 +198,8 @@ def test_a_resumed_run_sends_only_what_its_record_lacks_and_ends_alike():
     search, recorded, genomes = Search(task), {}, {}
     for batch in range(3):
         for candidate in search.ask()[:6 if batch < 2 else 2]:
-            recorded[candidate.candidate_id] = objectives_of(candidate.x, 1)
+            recorded[candidate.candidate_id] = objectives_of(candidate.x,
+                                                             len(task.objective_names))
             genomes[candidate.candidate_id] = candidate.x
         if batch < 2:
             search.tell({i: recorded[i] for i in (c.candidate_id for c in search.ask())})
@@ -209,7 +210,7 @@ def test_a_resumed_run_sends_only_what_its_record_lacks_and_ends_alike():
     assert controller.run_info()['resumed_from'] == 'old-run'
     first = [c.candidate_id for c, _, _, _, _ in outbox.candidates]
     assert 12 not in first and 13 not in first
-    answer_everything(controller, outbox, 1, clock)
+    answer_everything(controller, outbox, len(task.objective_names), clock)
     assert outbox.result['best_candidate_id'] == uninterrupted.candidate_id
     assert outbox.result['fitness'] == uninterrupted.fitness
     assert outbox.result['evaluations'] == 24

@@ -59,21 +59,22 @@ def test_evaluation_has_the_contract_fields(task):
     result = evaluate(x, task)
     assert isinstance(result, Evaluation)
     names = objective_names(task)
-    assert result.objective_names == tuple(names) == ('position_1',)
-    assert result.objectives.shape == (1,)
-    assert result.world_objectives.shape == (3, 1)
+    assert result.objective_names == tuple(names) == ('position_1', 'orientation_1')
+    assert result.objectives.shape == (2,)
+    assert result.world_objectives.shape == (3, 2)
     assert result.initial_errors.shape == result.final_errors.shape == (3, 2)
     assert result.fitness == pytest.approx(float(result.objectives @ task.objective_weights))
     assert not result.collision and result.unstable_worlds == 0
     assert result.simulated_time == pytest.approx(3 * 1.5)
     # eq. (5): the mean over the worlds plus the torque penalty
-    penalty = result.objectives[0] - result.world_objectives.mean()
+    penalty = result.objectives - result.world_objectives.mean(axis=0)
+    assert penalty[0] == pytest.approx(penalty[1], abs=1e-12)
     torque = np.abs(genome_spec(task).decode(x).controller.values).max()
     spec = task.torque_penalty
     expected = spec.weight * (torque - spec.threshold) if torque > spec.threshold else 0.0
-    assert penalty == pytest.approx(expected, abs=1e-12)
-    # the only goal is the last goal: its error at the end is the world's objective
-    np.testing.assert_array_equal(result.final_errors[:, 0], result.world_objectives[:, 0])
+    assert penalty[0] == pytest.approx(expected, abs=1e-12)
+    # the only goals are the last goals: their errors at the end are the world's objectives
+    np.testing.assert_array_equal(result.final_errors, result.world_objectives)
 
 
 def test_bit_identical_in_other_processes_and_orders(task):

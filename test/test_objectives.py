@@ -77,14 +77,18 @@ def test_slerp():
         [math.pi / 8, math.pi / 4, 3 * math.pi / 8])
 
 
-def small_task(position_goals, orientation_goals, early_termination=None, relative=False):
-    """Return Task 5 turned into a 1 s task with the given goals."""
+def small_task(position_goals, orientation_goals, early_termination=None, relative=False,
+               symmetry=None):
+    """Return Task 5 turned into a 1 s task with the given goals (every axis, every turn)."""
     document = yaml.safe_load((TASKS / 'task5.yaml').read_text())
     document['duration'] = 1.0
     document['policy']['duration'] = 1.0
     document['goals']['position'] = position_goals
     document['goals']['orientation'] = orientation_goals
     document['goals']['relative_to_start'] = relative
+    document['goals'].pop('orientation_symmetry')
+    if symmetry is not None:
+        document['goals']['orientation_symmetry'] = symmetry
     if early_termination is not None:
         document['early_termination'] = early_termination
     return parse_task(yaml.safe_dump(document), source='small.yaml')
@@ -246,3 +250,47 @@ def test_presets_build_schedules():
     assert task2.num_steps == 800 and task2.check_step_list[-1] == 800
     task4 = goal_schedule(load_task(TASKS / 'task4.yaml'))
     assert task4.check_step_list == (200,) and list(task4.objective_sizes) == [1, 1]
+
+
+def test_a_position_goal_measures_only_its_axes():
+    assert position_distance((1.0, 2.0, 3.0), (4.0, 6.0, 10.0), mask=(1, 1, 0)) == 5.0
+    assert position_distance((1.0, 2.0, 3.0), (4.0, 6.0, 10.0), 'manhattan',
+                             mask=(1, 1, 0)) == 7.0
+    assert position_distance((1.0, 2.0, 3.0), (4.0, 6.0, 10.0), mask=(0, 0, 1)) == 7.0
+    task = small_task([{'time': 1.0, 'position': [0.1, 0.0, 0.02], 'axes': ['y', 'x'],
+                        'trajectory': True}], [],
+                      early_termination={'distance': 0.05, 'angle': 0.3})
+    assert task.goals.position[0].axes == ('x', 'y')
+    schedule = goal_schedule(task)
+    trace = schedule.new_trace()
+    assert not follow(schedule, trace, offset_from=0.1, offset=(0.0, 0.0, 0.2))  # height only
+    assert trace.objective_values() == pytest.approx([0.0])
+    assert schedule.pose_errors((0.1, 0.0, 0.5), IDENTITY) == pytest.approx((0.0, 0.0))
+    trace = schedule.new_trace()
+    assert follow(schedule, trace, offset_from=0.5, offset=(0.0, 0.2, 0.0))  # on the plane
+    assert trace.count == 5
+    assert schedule.pose_errors((0.1, 0.03, 0.02), IDENTITY)[0] == pytest.approx(0.03)
+
+
+def test_symmetric_turns_are_the_objects_own_also_from_a_tilted_start():
+    """A cube's 90-degree turn about its own z scores 0, a turn about the world's z does not."""
+    document = yaml.safe_load(small_task(
+        [], [{'time': 1.0, 'orientation': {'axis': [0, 0, 1], 'angle': 0.9},
+              'trajectory': False}], relative=True,
+        symmetry={'axis': [0, 0, 1], 'order': 4}).source_text)
+    document['randomization']['orientation'] = {'axis': [1, 0, 0], 'range': [-0.5, 0.5]}
+    task = parse_task(yaml.safe_dump(document), source='tilted.yaml')
+    schedule = goal_schedule(task)
+    start = object_state(task, WorldState((0.0, 0.0, 0.0), 0.5, 0.0, 1.0, 1.0))
+    perfect = quaternion_multiply(about(Z, 0.9), start.orientation)
+    for own_turn, error in ((math.pi / 2, 0.0), (-math.pi, 0.0), (0.3, 0.3),
+                            (math.pi / 2 + 0.2, 0.2), (-math.pi / 2 - 0.7, 0.7)):
+        measured = quaternion_multiply(perfect, about(Z, own_turn))
+        trace = schedule.new_trace(start)
+        for _ in schedule.check_times:
+            trace.record((0.0, 0.0, 0.0), measured)
+        assert trace.objective_values() == pytest.approx([error], abs=1e-7)
+        assert schedule.pose_errors((0, 0, 0), measured, start)[1] == pytest.approx(
+            error, abs=1e-7)
+    world_turn = quaternion_multiply(about(Z, math.pi / 2), perfect)  # not a symmetry here
+    assert schedule.pose_errors((0, 0, 0), world_turn, start)[1] > 0.1

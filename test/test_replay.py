@@ -18,8 +18,10 @@ def test_replay_of_the_best_design_is_bit_identical_and_animated(real_run, tmp_p
     assert f'replaying candidate {real_run.result["best_candidate_id"]} ' in printed
     assert 'replay reproduces the recorded objectives bit for bit' in printed
     assert repr(real_run.result['objectives']['position_1']) in printed
+    rendered = int(printed.split(' frames of world 1)')[0].rsplit('(', 1)[1])
+    assert rendered >= 30  # 1.5 s of frames; the GIF merges repeated frames of a still scene
     frames = imageio.imread(gif, index=None)
-    assert frames.ndim == 4 and frames.shape[0] >= 30 and frames.shape[1:3] == (360, 480)
+    assert frames.ndim == 4 and frames.shape[0] >= 2 and frames.shape[1:3] == (360, 480)
     assert np.any(frames[0] != frames[-1])                  # the hand moves
     assert len(np.unique(frames[frames.shape[0] // 2].reshape(-1, 3), axis=0)) > 20
 
@@ -44,7 +46,8 @@ def test_a_changed_recording_is_reported_loudly(real_run, tmp_path, capsys):
 
     def tamper(topic, message):
         if topic == topics.EVALUATIONS and message.candidate_id == best:
-            message.objectives = [np.nextafter(message.objectives[0], 1.0)]
+            message.objectives = ([np.nextafter(message.objectives[0], 1.0)]
+                                  + list(message.objectives[1:]))
             return True
         return False
 

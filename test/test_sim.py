@@ -64,9 +64,9 @@ def test_a_design_starting_in_the_ground_collides(task, design):
     straight = with_fingers(design, lengths=(0.09, 0.09), angle=0.0)  # reaches below z = 0
     result = evaluate_design(straight, task)
     assert result.collision
-    np.testing.assert_array_equal(result.objectives, [COLLISION_PENALTY])
+    np.testing.assert_array_equal(result.objectives, [COLLISION_PENALTY] * 2)
     assert (result.world_objectives == COLLISION_PENALTY).all()
-    assert result.fitness == COLLISION_PENALTY
+    assert result.fitness == COLLISION_PENALTY * sum(task.objective_weights)  # 1.0 + 0.1
     assert result.simulated_time == 0.0
     np.testing.assert_array_equal(result.final_errors, result.initial_errors)
     assert not evaluate_design(design, task).collision

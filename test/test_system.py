@@ -76,13 +76,13 @@ def test_run_prints_bag_and_best_design(one_evaluator_run):
     assert 'best design: candidate' in output
     assert 'generation 3/3' in output
     result = json.loads((bag / 'result.json').read_text())
-    assert list(result['objectives']) == ['position_1']
+    assert list(result['objectives']) == ['position_1', 'orientation_1']
     assert result['evaluations'] == 3 * 6 and result['stop_reason'] == 'maxiter=3'
     table = read_run(bag, run_id=result['run_id']).generation_summaries
     final = table.row(len(table) - 1)
     assert final['final'] and result['best_candidate_id'] == final['best_candidate_id']
     assert result['fitness'] == final['best_fitness']
-    assert [result['objectives']['position_1']] == list(final['best_objectives'])
+    assert list(result['objectives'].values()) == list(final['best_objectives'])
 
 
 def test_same_summaries_with_one_and_three_evaluators(one_evaluator_run, tmp_path):

@@ -61,6 +61,18 @@ def test_table_one_values():
         assert 'stand-in' in seeded.source_text
 
 
+def test_goal_axes_and_symmetry():
+    task5 = load_task(TASK5)
+    assert task5.goals.position[0].axes == ('x', 'y')
+    assert task5.goals.orientation_symmetry.axis == (0.0, 0.0, 1.0)
+    assert task5.goals.orientation_symmetry.order == 4
+    assert task5.objective_names == ('position_1', 'orientation_1')
+    assert list(task5.objective_weights) == [1.0, 0.1]
+    task1 = load_task(ROOT / 'config' / 'tasks' / 'task1.yaml')
+    assert {goal.axes for goal in task1.goals.position} == {('x', 'y', 'z')}  # the default
+    assert task1.goals.orientation_symmetry is None
+
+
 def test_angles_take_pi_expressions():
     task = load_task(TASK5)
     bounds = task.morphology.initial_angle.values[0]
@@ -143,6 +155,20 @@ BAD_VALUES = [
     ('goals.position', [{'time': 9.0, 'position': [0, 0, 0.02], 'trajectory': False}],
      'expected a time within the duration'),
     ('morphology.friction', {'delta': [-0.1, 0.1]}, 'expected a seed_design'),
+    ('goals.position', [{'time': 1.5, 'position': [0, 0, 0.02], 'axes': ['x', 'w'],
+                         'trajectory': False}],
+     'goals.position[0].axes: expected a non-empty list of distinct world axes from x, y, z, '
+     "e.g. [x, y], got ['x', 'w']"),
+    ('goals.position', [{'time': 1.5, 'position': [0, 0, 0.02], 'axes': ['x', 'x'],
+                         'trajectory': False}], 'axes: expected a non-empty list of distinct'),
+    ('goals.position', [{'time': 1.5, 'position': [0, 0, 0.02], 'axes': [],
+                         'trajectory': False}], 'axes: expected a non-empty list of distinct'),
+    ('goals.orientation_symmetry', {'axis': [0, 0, 1], 'order': 1},
+     'goals.orientation_symmetry.order: expected an integer >= 2, got 1'),
+    ('goals.orientation_symmetry', {'axis': [0, 0, 0], 'order': 4},
+     'goals.orientation_symmetry.axis: expected a non-zero vector'),
+    ('goals.orientation_symmetry', {'axis': [0, 0, 1]},
+     'goals.orientation_symmetry.order: expected this key'),
 ]
 
 

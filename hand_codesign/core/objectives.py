@@ -39,6 +39,15 @@ the same unit quaternion, so that scores exactly as against the world's own goal
 `world_goal(..., start)` returns for display (`hand-codesign check`). Without the option
 `start` is ignored.
 
+Position goals measure the world axes they name (`axes`, e.g. [x, y] for an object on the
+plane): eq. (3) over those coordinates only, in the samples, early termination and
+`pose_errors` alike. With `goals.orientation_symmetry` the object looks the same turned by
+k * 2 pi / order about its own axis: `Trace.record` keeps, of those turns of the measured
+orientation, the one nearest to the check's orientation target (its last goal's when the check
+has none), so every orientation error below is eq. (4) to the nearest symmetric turn. The turns
+are about the object's own axis, so in a world whose measured poses map to the nominal start
+(q * turn) they are conjugated by that world's turn.
+
 Early termination (eq. 6): with `early_termination` set, at every multiple of
 1 / checks_per_second (10 per simulated second) the goal samples of that step are compared with
 their margins s_o (d_s for positions, theta_s for orientations); if one misses by more, the
@@ -59,7 +68,7 @@ the whole rollout, scored by eq. (5).
 import math
 from typing import Optional
 
-from hand_codesign.core.task import Task, TaskError
+from hand_codesign.core.task import axis_angle_quaternion, Task, TaskError
 import numpy as np
 
 COLLISION_PENALTY = 10000.0  # every objective of a design that starts in collision (eq. 5)
@@ -80,9 +89,16 @@ def task_torque_penalty(task: Task, torques):
     return 0.0 if spec is None else torque_penalty(torques, spec.threshold, spec.weight)
 
 
-def position_distance(actual, desired, metric='euclidean'):
-    """Return eq. (3): the Euclidean or Manhattan distance over the last axis."""
+def position_distance(actual, desired, metric='euclidean', mask=None):
+    """
+    Return eq. (3): the Euclidean or Manhattan distance over the last axis.
+
+    `mask` (1 for a measured axis, 0 for an ignored one; default all measured) restricts it
+    to a position goal's `axes`.
+    """
     difference = np.asarray(actual, dtype=float) - np.asarray(desired, dtype=float)
+    if mask is not None:
+        difference = difference * mask
     if metric == 'manhattan':
         return np.sum(np.abs(difference), axis=-1)
     return np.sqrt(np.sum(difference * difference, axis=-1))
@@ -143,7 +159,8 @@ class GoalSchedule:
     (bool per check: an early-termination check); num_objectives, objective_names;
     objective_start_times t(o), objective_end_times T(o), objective_sizes |o|; margins
     (s_o per objective, or None without early termination); last_position and
-    last_orientation (the final goals, or the start pose for a kind without goals).
+    last_orientation (the final goals, or the start pose for a kind without goals, which
+    pose_errors scores 0).
     """
 
     def __init__(self, task: Task):
@@ -170,6 +187,9 @@ class GoalSchedule:
         self.objective_end_times = np.array([w[1] for w in windows]) * self.time_step
         self.objective_sizes = np.array([w[2] for w in windows], dtype=float)
         self._position = self._table(position_samples, check_of_step, 3, 0)
+        masks = [_axes_mask(goal.axes) for goal in task.goals.position]
+        self._position['mask'] = (np.array([masks[row] for row in self._position['objective']])
+                                  if masks else np.zeros((0, 3)))
         self._orientation = self._table(orientation_samples, check_of_step, 4,
                                         self.num_position)
         self.termination = np.zeros(self.num_checks, dtype=bool)
@@ -191,6 +211,11 @@ class GoalSchedule:
                                       if task.goals.position else start.position)
         self.last_orientation = np.array(task.goals.orientation[-1].orientation
                                          if task.goals.orientation else start.orientation)
+        # pose_errors measures the last position goal's axes; none for a task without one
+        self.last_mask = (_axes_mask(task.goals.position[-1].axes) if task.goals.position
+                          else np.zeros(3))
+        self.has_orientation_goals = bool(task.goals.orientation)
+        self.symmetries = _symmetry_turns(task.goals.orientation_symmetry)
         self.relative_to_start = task.goals.relative_to_start
         self.start_position = np.array(start.position, dtype=float)
         self.start_orientation = tuple(start.orientation)
@@ -335,7 +360,8 @@ class GoalSchedule:
         table = self._position
         start, end = table['start_list'][check], table['end_list'][check]
         if end > start:
-            distance = position_distance(position, table['target'][start:end], self.distance)
+            distance = position_distance(position, table['target'][start:end], self.distance,
+                                         table['mask'][start:end])
             if np.any(distance > self.position_margin):
                 return True
         table = self._orientation
@@ -349,14 +375,14 @@ class GoalSchedule:
     def sample_errors(self, positions, orientations, num_recorded):
         """Return (objective index, error) arrays of the samples of the first checks."""
         parts = []
-        for table, values, measure in (
-                (self._position, positions,
-                 lambda a, b: position_distance(a, b, self.distance)),
-                (self._orientation, orientations, orientation_angle)):
+        for table, values in ((self._position, positions), (self._orientation, orientations)):
             count = int(np.searchsorted(table['check'], num_recorded, side='left'))
-            checks = table['check'][:count]
-            errors = measure(np.asarray(values)[checks], table['target'][:count]) \
-                if count else np.zeros(0)
+            measured = np.asarray(values)[table['check'][:count]]
+            if table is self._position:
+                errors = position_distance(measured, table['target'][:count], self.distance,
+                                           table['mask'][:count])
+            else:
+                errors = orientation_angle(measured, table['target'][:count])
             parts.append((table['objective'][:count], errors))
         return (np.concatenate([parts[0][0], parts[1][0]]),
                 np.concatenate([parts[0][1], parts[1][1]]))
@@ -369,7 +395,8 @@ class GoalSchedule:
         positions (checks x 3) and orientations (checks x 4) hold the object pose read at
         each check; only the first `num_recorded` rows count. A rollout with fewer rows than
         checks was cut at the last recorded check (t = 0 if none): goals after it are charged
-        `margins` (default: the task's d_s / theta_s per objective) as eq. (6) says.
+        `margins` (default: the task's d_s / theta_s per objective) as eq. (6) says. With an
+        orientation symmetry, orientations must be a Trace's (the nearest symmetric turns).
         """
         objectives, errors = self.sample_errors(positions, orientations, num_recorded)
         sums = np.bincount(objectives, weights=errors, minlength=self.num_objectives)
@@ -403,18 +430,49 @@ class GoalSchedule:
         return np.where(end <= stop_time + 1e-12, sums / self.objective_sizes, cut)
 
     def pose_errors(self, position, orientation, start=None):
-        """Return (distance, angle) of a pose from the last goals (of the world of `start`)."""
+        """
+        Return (distance, angle) of a pose from the last goals (of the world of `start`).
+
+        A kind of goal the task does not have (Task 6's "final position irrelevant") is 0.
+        """
         transform = self.start_transform(start)
         if transform is not None:
             position, orientation = _to_nominal(transform, position, orientation)
-        return (float(position_distance(position, self.last_position, self.distance)),
-                float(orientation_angle(orientation, self.last_orientation)))
+        turns = self.world_symmetries(transform)
+        if turns is not None:
+            orientation = _nearest_turn(orientation, turns, self.last_orientation)
+        angle = (float(orientation_angle(orientation, self.last_orientation))
+                 if self.has_orientation_goals else 0.0)
+        return (float(position_distance(position, self.last_position, self.distance,
+                                        self.last_mask)), angle)
+
+    def world_symmetries(self, transform):
+        """
+        Return the symmetric turns (order x 4) that act on mapped orientations, or None.
+
+        A symmetric turn s of the object's own frame makes q and q * s the same pose; mapped
+        to the nominal start that is q * turn and q * turn * (turn^-1 * s * turn).
+        """
+        if self.symmetries is None:
+            return None
+        if transform is None:
+            return self.symmetries
+        turn = np.asarray(transform[1], dtype=float)
+        inverse = quaternion_conjugate(turn)
+        return np.array([quaternion_multiply(quaternion_multiply(inverse, s), turn)
+                         for s in self.symmetries])
+
+    def check_orientation_target(self, check):
+        """Return the orientation target of check `check` (the last goal's if it has none)."""
+        table = self._orientation
+        start, end = table['start_list'][check], table['end_list'][check]
+        return table['target'][start] if end > start else self.last_orientation
 
 
 class Trace:
     """The object poses of one rollout at the schedule's checks, preallocated."""
 
-    __slots__ = ('schedule', 'positions', 'orientations', 'count', 'transform')
+    __slots__ = ('schedule', 'positions', 'orientations', 'count', 'transform', 'turns')
 
     def __init__(self, schedule: GoalSchedule, transform=None):
         self.schedule = schedule
@@ -422,12 +480,16 @@ class Trace:
         self.orientations = np.zeros((schedule.num_checks, 4))
         self.count = 0
         self.transform = transform  # GoalSchedule.start_transform of the world, or None
+        self.turns = schedule.world_symmetries(transform)  # None without a symmetry
 
     def record(self, position, orientation):
         """Store the pose of the next check; return True if early termination stops here."""
         check = self.count
         if self.transform is not None:
             position, orientation = _to_nominal(self.transform, position, orientation)
+        if self.turns is not None:
+            orientation = _nearest_turn(orientation, self.turns,
+                                        self.schedule.check_orientation_target(check))
         self.positions[check] = position
         self.orientations[check] = orientation
         self.count = check + 1
@@ -453,6 +515,26 @@ def quaternion_conjugate(quaternion):
     """Return the conjugate (the inverse of a unit quaternion) of (x, y, z, w)."""
     x, y, z, w = quaternion
     return (-x, -y, -z, w)
+
+
+def _axes_mask(axes):
+    """Return 1.0 for each of x, y, z a position goal measures, else 0.0."""
+    return np.array([1.0 if axis in axes else 0.0 for axis in 'xyz'])
+
+
+def _symmetry_turns(symmetry):
+    """Return the unit quaternions of the object's symmetric turns (order x 4), or None."""
+    if symmetry is None:
+        return None
+    return np.array([axis_angle_quaternion(symmetry.axis, 2.0 * math.pi * k / symmetry.order)
+                     for k in range(symmetry.order)])
+
+
+def _nearest_turn(orientation, turns, target):
+    """Return the orientation * turn (of `turns`) at the smallest eq. (4) angle to target."""
+    candidates = np.array(quaternion_multiply(orientation, np.asarray(turns).T)).T
+    inner = candidates @ np.asarray(target, dtype=float)
+    return candidates[int(np.argmax(np.abs(inner)))]
 
 
 def _to_nominal(transform, position, orientation):

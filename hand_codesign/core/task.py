@@ -41,8 +41,9 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
       distance: euclidean            # euclidean | manhattan, for position goals (eq. 3)
       samples_per_second: 10         # optional: spacing of a trajectory's interpolated goals
       relative_to_start: false       # optional: true moves each world's goals with its start
+      orientation_symmetry: {axis: [0, 0, 1], order: 4}   # optional, see below
       position:                      # goals i = 1..n, strictly increasing times (may be [])
-        - {time: 1.5, position: [0, 0, 0.02], trajectory: false}
+        - {time: 1.5, position: [0.01, 0, 0.02], axes: [x, y], trajectory: false}
       orientation:                   # goals i = 1..m (may be []); at least one goal in all
         - {time: 1.5, orientation: {axis: [0, 0, 1], angle: 0.785}, trajectory: true}
     randomization:                   # domain randomization, uniform in each range
@@ -92,6 +93,13 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
       evaluation_world_states: 64    # worlds the best design of each structure is tested on
     seed_design: task1_seed.yaml     # optional: a starting design (seeded search, Tasks 1/2),
                                      # inline or a file path relative to this task file
+
+A position goal's `axes` (optional, default [x, y, z]) names the world axes its distance
+measures: [x, y] scores an object on the plane by where it is on the plane, whatever height its
+randomized scale rests it at. `orientation_symmetry` says the object looks the same turned by
+any multiple of 360 / order degrees about `axis` of its own frame (a cube: order 4 about each
+face normal): orientation goals then score the nearest of those turns (eq. 4 taken modulo the
+symmetry). Without it every turn counts, as in the paper.
 
 A parameter setting is one of:
 
@@ -149,6 +157,7 @@ PARAMETER_MODES = ('fixed', 'bounds', 'delta', 'seed', 'none')
 MORPHOLOGY_PARAMETERS = ('initial_angle', 'finger_position_x', 'finger_position_z',
                          'segment_length', 'axis_angle', 'joint_limits', 'friction')
 RESTING_TOLERANCE = 1e-4  # m: how far a plane start's z may be from the resting height
+AXES = ('x', 'y', 'z')  # the world axes a position goal may measure
 
 
 class TaskError(ValueError):
@@ -200,11 +209,12 @@ class HandSpec:
 
 @dataclass(frozen=True)
 class PositionGoal:
-    """Object position `position` (world, m) wanted at `time` (s)."""
+    """Object position `position` (world, m) wanted at `time` (s), measured along `axes`."""
 
     time: float
     position: Tuple[float, float, float]
     trajectory: bool  # also score interpolated goals from the previous goal (III.C)
+    axes: Tuple[str, ...] = AXES  # the world axes eq. (3) measures, in x, y, z order
 
 
 @dataclass(frozen=True)
@@ -214,6 +224,14 @@ class OrientationGoal:
     time: float
     orientation: Tuple[float, float, float, float]
     trajectory: bool
+
+
+@dataclass(frozen=True)
+class SymmetrySpec:
+    """The object looks the same turned by k * 2 pi / order about `axis` (object frame)."""
+
+    axis: Tuple[float, float, float]  # unit vector in the object's own frame
+    order: int  # >= 2: the number of turns (including none) that look the same
 
 
 @dataclass(frozen=True)
@@ -228,6 +246,9 @@ class GoalSpec:
     # each world's goals move with its start (shifted by its position offset, turned by its
     # orientation delta), so randomizing the start never counts as an error by itself.
     relative_to_start: bool = False
+    # None: every turn of the object counts (eq. 4). Otherwise orientation goals score the
+    # nearest of the object's symmetric turns.
+    orientation_symmetry: Optional[SymmetrySpec] = None
 
 
 @dataclass(frozen=True)
@@ -657,7 +678,8 @@ class _Reader:
 
     def goals(self, value, key):
         section = self.mapping(value, key, required=('distance', 'position', 'orientation'),
-                               optional=('samples_per_second', 'relative_to_start'))
+                               optional=('samples_per_second', 'relative_to_start',
+                                         'orientation_symmetry'))
         position = self.goal_list(section['position'], _join(key, 'position'), 'position')
         orientation = self.goal_list(section['orientation'], _join(key, 'orientation'),
                                      'orientation')
@@ -669,7 +691,24 @@ class _Reader:
             samples_per_second=self.number(section.get('samples_per_second', 10.0),
                                            _join(key, 'samples_per_second'), positive=True),
             relative_to_start=self.boolean(section.get('relative_to_start', False),
-                                           _join(key, 'relative_to_start')))
+                                           _join(key, 'relative_to_start')),
+            orientation_symmetry=self.symmetry(section.get('orientation_symmetry'),
+                                               _join(key, 'orientation_symmetry')))
+
+    def symmetry(self, value, key):
+        if value is None:
+            return None
+        section = self.mapping(value, key, required=('axis', 'order'))
+        order = self.integer(section['order'], _join(key, 'order'), minimum=2)
+        return SymmetrySpec(axis=self.unit_vector(section['axis'], _join(key, 'axis')),
+                            order=order)
+
+    def axes(self, value, key):
+        if not isinstance(value, list) or not value or any(
+                axis not in AXES for axis in value) or len(set(value)) != len(value):
+            self.fail(key, 'a non-empty list of distinct world axes from x, y, z, e.g. '
+                      '[x, y]', value)
+        return tuple(axis for axis in AXES if axis in value)
 
     def goal_list(self, value, key, kind):
         if not isinstance(value, list):
@@ -677,15 +716,17 @@ class _Reader:
         goals = []
         for index, item in enumerate(value):
             item_key = f'{key}[{index}]'
-            item = self.mapping(item, item_key, required=('time', kind, 'trajectory'))
+            item = self.mapping(item, item_key, required=('time', kind, 'trajectory'),
+                                optional=('axes',) if kind == 'position' else ())
             time = self.number(item['time'], _join(item_key, 'time'), positive=True)
             if goals and time <= goals[-1].time:
                 self.fail(_join(item_key, 'time'),
                           f"a time after the previous goal's {goals[-1].time}", item['time'])
             trajectory = self.boolean(item['trajectory'], _join(item_key, 'trajectory'))
             if kind == 'position':
-                goals.append(PositionGoal(time, self.vector(item[kind], _join(item_key, kind),
-                                                            3), trajectory))
+                goals.append(PositionGoal(
+                    time, self.vector(item[kind], _join(item_key, kind), 3), trajectory,
+                    self.axes(item.get('axes', list(AXES)), _join(item_key, 'axes'))))
             else:
                 goals.append(OrientationGoal(time, self.quaternion(item[kind],
                                                                    _join(item_key, kind)),
