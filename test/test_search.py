@@ -3,6 +3,7 @@
 import pathlib
 
 from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.objectives import weighted_fitness
 from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.search import Search
 import numpy as np
@@ -21,7 +22,7 @@ def test_ask_repeats_the_batch_until_it_is_told():
     assert [c.candidate_id for c in search.ask()] == [c.candidate_id for c in first]
     assert all(c.structure == task.structure for c in first)
     assert all(c.x.shape == (genome_spec(task).size,) for c in first)
-    search.tell(objectives(first, 1))
+    search.tell(objectives(first, len(task.objective_names)))
     second = search.ask()
     assert [c.candidate_id for c in second] == [4, 5, 6, 7]
     assert {c.generation for c in second} == {1}
@@ -34,13 +35,14 @@ def test_a_search_stops_after_its_budget_with_the_best_design():
     assert search.best is None
     told = {}
     while not search.stop():
-        results = objectives(search.ask(), 1)
+        results = objectives(search.ask(), len(task.objective_names))
         told.update(results)
         search.tell(results)
     assert search.stop() == {'maxiter': 2}
     result, structure = search.best
     assert structure == task.structure
-    assert result.fitness == min(float(value[0]) for value in told.values())
+    assert result.fitness == min(weighted_fitness(value, task.objective_weights)
+                                 for value in told.values())
 
 
 def test_a_same_seed_gives_the_same_candidates():
