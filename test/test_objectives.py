@@ -6,9 +6,8 @@ import pathlib
 from hand_codesign.core import load_task, parse_task
 from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
                                            orientation_angle, position_distance,
-                                           quaternion_multiply, slerp,
                                            torque_penalty, weighted_fitness)
-from hand_codesign.core.task import axis_angle_quaternion
+from hand_codesign.core.rotations import axis_angle_quaternion, quaternion_multiply, slerp
 from hand_codesign.core.worlds import object_state, WorldState
 import numpy as np
 import pytest

@@ -68,7 +68,9 @@ the whole rollout, scored by eq. (5).
 import math
 from typing import Optional
 
-from hand_codesign.core.task import axis_angle_quaternion, Task, TaskError
+from hand_codesign.core.rotations import (axis_angle_quaternion, quaternion_conjugate,
+                                          quaternion_multiply, slerp)
+from hand_codesign.core.task import Task, TaskError
 import numpy as np
 
 COLLISION_PENALTY = 10000.0  # every objective of a design that starts in collision (eq. 5)
@@ -114,22 +116,6 @@ def orientation_angle(actual, desired):
     inner = np.sum(np.asarray(actual, dtype=float) * np.asarray(desired, dtype=float),
                    axis=-1)
     return np.arccos(np.clip(2.0 * inner * inner - 1.0, -1.0, 1.0))
-
-
-def slerp(start, end, fraction):
-    """Return the unit quaternion a `fraction` of the shortest rotation from start to end."""
-    start = np.asarray(start, dtype=float)
-    end = np.asarray(end, dtype=float)
-    inner = float(np.dot(start, end))
-    if inner < 0.0:  # q and -q are one rotation: take the short way round
-        end, inner = -end, -inner
-    if inner > 0.9995:
-        result = start + fraction * (end - start)
-    else:
-        angle = math.acos(min(inner, 1.0))
-        result = (math.sin((1.0 - fraction) * angle) * start
-                  + math.sin(fraction * angle) * end) / math.sin(angle)
-    return result / np.linalg.norm(result)
 
 
 def combine_worlds(world_values, penalty=0.0, collision=False):
@@ -499,22 +485,6 @@ class Trace:
         """Return this world's h_o (or h'_o) per objective."""
         return self.schedule.objective_values(self.positions, self.orientations, self.count,
                                               margins)
-
-
-def quaternion_multiply(first, second):
-    """Return the Hamilton product first * second of quaternions (x, y, z, w)."""
-    x1, y1, z1, w1 = first
-    x2, y2, z2, w2 = second
-    return (w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2)
-
-
-def quaternion_conjugate(quaternion):
-    """Return the conjugate (the inverse of a unit quaternion) of (x, y, z, w)."""
-    x, y, z, w = quaternion
-    return (-x, -y, -z, w)
 
 
 def _axes_mask(axes):

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import itertools
 from typing import List, Tuple
 
-from hand_codesign.core.objectives import quaternion_multiply
+from hand_codesign.core.rotations import axis_angle_quaternion, quaternion_multiply
 from hand_codesign.core.task import resting_height, Task
 import numpy as np
 
@@ -96,9 +96,7 @@ def object_state(task: Task, world: WorldState) -> ObjectState:
     """
     spec = task.object_spec
     axis = task.randomization.orientation_axis
-    half = world.orientation_delta / 2
-    turn = (axis[0] * np.sin(half), axis[1] * np.sin(half), axis[2] * np.sin(half),
-            np.cos(half))
+    turn = axis_angle_quaternion(axis, world.orientation_delta)
     orientation = np.array(quaternion_multiply(turn, spec.orientation), dtype=float)
     orientation = tuple(float(v) for v in orientation / np.linalg.norm(orientation))
     position = [float(p + d) for p, d in zip(spec.position, world.position_delta)]
