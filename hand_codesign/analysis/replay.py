@@ -1,6 +1,5 @@
 """
-`hand-codesign replay BAG [--generation G] [--rank K] [--world W] [--gif FILE | --gui | --mcap
-FILE]`.
+`hand-codesign replay BAG [--generation G] [--rank K] [--world W] [--gif F | --gui | --mcap F]`.
 
 Rebuilds one recorded design from the bag (default: the run's best; with --generation and
 --rank the K-th best of generation G, 0 the best), re-simulates it with `core.evaluate` on the

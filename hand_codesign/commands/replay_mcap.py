@@ -22,8 +22,8 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped
 from hand_codesign.analysis.replay import rollout_poses
 from hand_codesign.core import contract
-from hand_codesign.core.geometry import goal_poses
 from hand_codesign.core.geometry import GOAL_COLOUR
+from hand_codesign.core.geometry import goal_poses
 from hand_codesign.core.geometry import hand_shapes
 from hand_codesign.core.geometry import object_shapes
 from hand_codesign.core.worlds import object_state

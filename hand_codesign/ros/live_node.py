@@ -17,13 +17,13 @@ import time
 
 import foxglove
 from hand_codesign.core.contract import LIVE_READY
+from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
 from hand_codesign.ros.mcap_writer import message_definition
 from hand_codesign.ros.mcap_writer import MESSAGE_ENCODING
 from hand_codesign.ros.mcap_writer import SCHEMA_ENCODING
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign.ros.recording import recorder_qos
-from hand_codesign.errors import UserError
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
@@ -62,7 +62,7 @@ class LiveView(Node):
                             f'{self.settings["host"]}:{self.settings["port"]}: {error}')
         self.create_timer(REPEAT_PERIOD, self.repeat_last)
         self.get_logger().info(
-            f'{LIVE_READY}: ws://{self.settings["host"]}:{self.server.port()} serving '
+            f'{LIVE_READY}: ws://{self.settings["host"]}:{self.server.port} serving '
             f'{", ".join(self.channels)}')
 
     def forwarder(self, topic):
