@@ -11,10 +11,13 @@ the loopback interface, byte for byte as the bag records them.
 
 import asyncio
 import json
+import os
 import queue
 import re
+import socket
 import struct
 import subprocess
+import sys
 import threading
 
 from analysis_run import CLI
@@ -223,6 +226,20 @@ async def watch_live(address, wanted, received, stop):
 def listening_addresses(port):
     return {connection.laddr.ip for connection in psutil.net_connections(kind='tcp')
             if connection.status == psutil.CONN_LISTEN and connection.laddr.port == port}
+
+
+def test_a_busy_port_stops_the_live_view_with_one_line():
+    with socket.socket() as busy:
+        busy.bind(('127.0.0.1', 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        process = subprocess.run([sys.executable, '-m', 'hand_codesign.ros.live_node',
+                                  '--ros-args', '-p', f'port:={port}'], cwd=ROOT,
+                                 env=dict(os.environ, ROS_DOMAIN_ID='149'),
+                                 capture_output=True, text=True, timeout=120)
+    assert process.returncode == 2
+    assert process.stderr.count('\n') == 1
+    assert f'cannot serve on 127.0.0.1:{port}' in process.stderr, process.stderr
 
 
 def test_a_live_run_is_served_to_foxglove_as_its_bag_records_it(tmp_path):
