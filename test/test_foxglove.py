@@ -80,7 +80,7 @@ def best_design(bag):
     return task, design, genome_spec(task).decode(design.x)
 
 
-def test_the_bag_holds_the_best_design_of_each_generation_as_markers(real_run):
+def test_the_bag_holds_the_best_design_of_each_generation_as_markers(real_run, tmp_path):
     arrays = decoded_messages(real_run.mcap, contract.BEST_DESIGN)
     summaries = decoded_messages(real_run.mcap, contract.GENERATION_SUMMARY)
     assert len(arrays) == len(summaries) >= 2
@@ -93,7 +93,7 @@ def test_the_bag_holds_the_best_design_of_each_generation_as_markers(real_run):
     assert_same_drawing(arrays[-1].markers, design_shapes(task, physical))
     # the object at its start is drawn too, and the bag still analyses
     assert any(m.ns == 'object' for m in arrays[-1].markers)
-    assert main(['analyze', str(real_run.bag), '--out', str(real_run.bag.parent / 'r')]) == 0
+    assert main(['analyze', str(real_run.bag), '--out', str(tmp_path / 'report')]) == 0
 
 
 def test_replay_writes_a_ros2_mcap_that_plays_the_rollout(real_run, tmp_path, capsys):
