@@ -26,6 +26,7 @@ setup(
             'optimizer = hand_codesign.commands.optimizer:main',
             'evaluator = hand_codesign.ros.evaluator_node:main',
             'recorder = hand_codesign.ros.recorder_node:main',
+            'live_view = hand_codesign.ros.live_node:main',
             'codesign = hand_codesign.cli:main',
             'hand-codesign = hand_codesign.cli:main',
         ],

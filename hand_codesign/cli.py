@@ -19,7 +19,7 @@ VERBS = {
             'run a co-design as ROS 2 processes and record it to a bag'),
     'analyze': ('hand_codesign.analysis.report', 'analyze_command',
                 'write plots, a CSV and a report of a run from its bag'),
-    'replay': ('hand_codesign.analysis.replay', 'replay_command',
+    'replay': ('hand_codesign.commands.replay', 'replay_command',
                're-simulate a recorded design, check its objectives, render it'),
     'robustness': ('hand_codesign.analysis.robustness_report', 'robustness_command',
                    'evaluate the best design of a bag on many world states'),
@@ -42,6 +42,12 @@ def add_run_arguments(parser):
     parser.add_argument('--domain-id', type=int,
                         help='ROS_DOMAIN_ID of the run (default: a free one of this host)')
     parser.add_argument('--quiet', action='store_true', help='print only the final summary')
+    parser.add_argument('--live', type=int, nargs='?', const=8765, metavar='PORT',
+                        help='serve the run live to Foxglove over WebSocket (default port '
+                             '8765; 0: any free port)')
+    parser.add_argument('--live-host', default='127.0.0.1', metavar='HOST',
+                        help='address the live view serves on (default 127.0.0.1: this host '
+                             'only)')
 
 
 def add_check_arguments(parser):
@@ -66,6 +72,8 @@ def add_bag_arguments(verb, parser):
         output = parser.add_mutually_exclusive_group()
         output.add_argument('--gif', help='write an animated GIF of the motion')
         output.add_argument('--gui', action='store_true', help='open the PyBullet window')
+        output.add_argument('--mcap', metavar='FILE',
+                            help='write the rollout as a ROS 2 MCAP of markers (Foxglove)')
     elif verb == 'robustness':
         parser.add_argument('--samples', type=int, default=15625,
                             help='world states (default 15625 = 5 values on 6 quantities)')

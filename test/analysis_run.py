@@ -88,10 +88,10 @@ def copy_bag(source_mcap, destination, keep=None, edit=None):
     decoded rclpy message in place before it is written.
     """
     writer = BagWriter(str(destination))
-    for topic, message_class in topics.MESSAGE_TYPES.items():
+    for topic, message_class in topics.RECORDED_MESSAGE_TYPES.items():
         writer.add_topic('/' + topic, topics.type_name(message_class), [topics.QOS[topic]])
     for topic, log_time, publish_time, data in raw_messages(source_mcap):
-        message = deserialize_message(data, topics.MESSAGE_TYPES[topic])
+        message = deserialize_message(data, topics.RECORDED_MESSAGE_TYPES[topic])
         if keep is not None and not keep(topic, log_time, message):
             continue
         if edit is not None and edit(topic, message):

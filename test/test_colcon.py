@@ -14,7 +14,7 @@ import sys
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-EXECUTABLES = ['optimizer', 'evaluator', 'recorder', 'codesign']
+EXECUTABLES = ['optimizer', 'evaluator', 'recorder', 'live_view', 'codesign']
 
 
 @pytest.fixture(scope='module')

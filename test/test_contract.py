@@ -7,9 +7,13 @@ from hand_codesign_msgs.msg import Evaluation
 
 def test_every_topic_has_the_type_of_its_message_class():
     assert list(contract.TOPIC_TYPES) == list(topics.MESSAGE_TYPES)
-    for topic, message_class in topics.MESSAGE_TYPES.items():
-        assert contract.TOPIC_TYPES[topic] == topics.type_name(message_class)
-    assert set(topics.QOS) == set(contract.TOPIC_TYPES)
+    assert list(contract.RECORDED_TOPIC_TYPES) == list(topics.RECORDED_MESSAGE_TYPES)
+    for topic, message_class in topics.RECORDED_MESSAGE_TYPES.items():
+        assert contract.RECORDED_TOPIC_TYPES[topic] == topics.type_name(message_class)
+    assert set(topics.QOS) == set(contract.RECORDED_TOPIC_TYPES)
+    # the bag reader decodes the loop's own types; the view's are standard messages
+    assert set(contract.LOOP_TYPES) == set(contract.TOPIC_TYPES.values())
+    assert all(name.startswith(contract.MESSAGES_PACKAGE + '/') for name in contract.LOOP_TYPES)
 
 
 def test_status_codes_are_those_of_evaluation_msg():

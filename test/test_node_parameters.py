@@ -33,6 +33,7 @@ def start_node(module, *parameters):
     ('hand_codesign.ros.evaluator_node', ['capacity:=0'], 'Parameter capacity out of range'),
     ('hand_codesign.ros.recorder_node', ['topics:=[candidates, nope]'],
      "parameter topics: ['nope'] are not topics of the co-design loop"),
+    ('hand_codesign.ros.live_node', ['port:=70000'], 'Parameter port out of range'),
 ])
 def test_a_bad_parameter_stops_the_node_with_one_line(module, parameters, message):
     process = start_node(module, *parameters)

@@ -1,5 +1,5 @@
 """
-`hand-codesign replay BAG [--generation G] [--rank K] [--world W] [--gif FILE | --gui]`.
+`hand-codesign replay BAG [--generation G] [--rank K] [--world W] [--gif F | --gui | --mcap F]`.
 
 Rebuilds one recorded design from the bag (default: the run's best; with --generation and
 --rank the K-th best of generation G, 0 the best), re-simulates it with `core.evaluate` on the
@@ -10,7 +10,9 @@ lists the versions), or evaluation is not deterministic.
 
 Then it shows world W: as an animated GIF rendered in DIRECT mode with the TinyRenderer from a
 fixed camera (default file `<bag>_candidate<id>_world<W>.gif` next to the bag, or --gif), or
-live in the PyBullet window with --gui (needs a display).
+live in the PyBullet window with --gui (needs a display), or as a ROS 2 MCAP of markers for
+Foxglove with --mcap (written by hand_codesign.commands.replay, which gives `write_mcap`:
+writing messages is not this room's; `rollout_poses` here simulates what it draws).
 """
 
 import os
@@ -22,6 +24,8 @@ from hand_codesign.analysis import records
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.evaluate import evaluate_design
 from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.geometry import link_frames
+from hand_codesign.core.hand import hand_model
 from hand_codesign.core.sim import object_shape
 from hand_codesign.core.sim import Simulator
 from hand_codesign.core.worlds import object_state
@@ -38,8 +42,15 @@ OBJECT_COLOUR = (0.2, 0.45, 0.85, 1.0)
 GROUND_COLOUR = (0.8, 0.8, 0.8, 1.0)
 
 
-def replay_command(arguments):
-    """Replay one design of a bag; return 0, or 1 when the objectives differ."""
+def replay_command(arguments, write_mcap=None):
+    """
+    Replay one design of a bag; return 0, or 1 when the objectives differ.
+
+    write_mcap(path, task, design, world) -> frames: writes the --mcap file, if asked for.
+    """
+    if getattr(arguments, 'mcap', None) and write_mcap is None:
+        raise UserError('--mcap: this entry point cannot write MCAP files; run '
+                        '`hand-codesign replay`')
     if arguments.gui and not has_display():
         raise UserError('--gui needs a display, and this session has none (DISPLAY is not '
                         'set); render an animation instead with --gif FILE')
@@ -60,6 +71,10 @@ def replay_command(arguments):
     same = report_comparison(design, evaluation)
     if arguments.gui:
         show_gui(task, design, worlds[arguments.world])
+    elif getattr(arguments, 'mcap', None):
+        frames = write_mcap(pathlib.Path(arguments.mcap), task, design, worlds[arguments.world])
+        print(f'MCAP for Foxglove: {arguments.mcap} ({frames} frames of world '
+              f'{arguments.world})')
     else:
         gif = pathlib.Path(arguments.gif) if arguments.gif else default_gif_path(
             record.path, design.candidate_id, arguments.world)
@@ -207,6 +222,38 @@ def render_frames(task, design, world):
                                                         task.object_spec.shape))
             grabber(0, simulator)
     return grabber.frames
+
+
+def rollout_poses(task, design, world):
+    """
+    Return (HandModel, palm pose, frames) of one world's rollout of a RecordedDesign.
+
+    frames: [(time s, link frames, object pose)] at the animation's frame rate, poses as
+    (position, quaternion xyzw) in the world frame, link frames as core.hand's table places
+    them (at the joints). A design starting in collision is not simulated: one frame shows the
+    start, the hand at its initial angles.
+    """
+    physical = genome_spec(task).decode(design.x)
+    model = hand_model(physical.hand, task.hand)
+    palm = (tuple(task.hand.base_position), tuple(task.hand.base_orientation))
+    frames = []
+
+    def grab(step, simulator):
+        client = simulator.client
+        links = client.getLinkStates(simulator.hand, list(range(model.num_joints)),
+                                     computeForwardKinematics=True)
+        position, orientation = client.getBasePositionAndOrientation(simulator.object_body)
+        frames.append((step * task.time_step,
+                       [(tuple(link[4]), tuple(link[5])) for link in links],
+                       (tuple(position), tuple(orientation))))
+
+    with Simulator() as simulator:
+        evaluate_design(physical, task, worlds=[world], simulator=simulator, on_frame=grab,
+                        frame_every=frame_every(task))
+    if not frames:
+        state = object_state(task, world)
+        frames.append((0.0, link_frames(model, palm), (state.position, state.orientation)))
+    return model, palm, frames
 
 
 def render_gif(path, task, design, world):

@@ -32,7 +32,8 @@ def run_command(arguments):
         raise UserError(f'--bag {bag}: give a folder (the run writes its bag, result.json and '
                         'logs there), not a .mcap file')
     with claimed_domain(arguments.domain_id) as domain_id:
-        system = System(bag, domain_id, quiet=arguments.quiet)
+        live = None if arguments.live is None else (arguments.live_host, arguments.live)
+        system = System(bag, domain_id, quiet=arguments.quiet, live=live)
         say = system.say
         source = arguments.task or f'resumed from {arguments.resume}'
         say(f'run: task {task.name} ({source}), evaluators: {arguments.evaluators}, '
@@ -88,6 +89,9 @@ def termination_as_interrupt():
 
 def check_arguments(arguments):
     """Return the run's Task, or raise UserError naming the bad flag or file."""
+    if arguments.live is not None and not 0 <= arguments.live <= 65535:
+        raise UserError(f'--live: expected a TCP port from 0 (any free one) to 65535, got '
+                        f'{arguments.live}')
     if arguments.resume:
         return resumed_task(arguments)
     if not arguments.task:

@@ -39,6 +39,23 @@ TOPIC_TYPES = {
 }
 LOOP_TYPES = tuple(TOPIC_TYPES.values())
 
+# What a 3D viewer (Foxglove, Lichtblick, RViz) draws: standard messages beside the loop's,
+# recorded in the bag too. With each generation summary the optimizer publishes the best
+# design so far (core.geometry's shapes) as markers in the frame WORLD_FRAME.
+BEST_DESIGN = 'best_design'
+MARKER_ARRAY_TYPE = 'visualization_msgs/msg/MarkerArray'
+WORLD_FRAME = 'world'
+VIEW_TOPIC_TYPES = {BEST_DESIGN: MARKER_ARRAY_TYPE}
+# every topic a run's recorder writes to its bag (and a live view forwards)
+RECORDED_TOPIC_TYPES = {**TOPIC_TYPES, **VIEW_TOPIC_TYPES}
+
+# The topics of a rollout written by `hand-codesign replay BAG --mcap FILE`: per frame, the
+# hand and the object as markers, and the goal in effect (the next one, then the last one).
+REPLAY_MARKERS = 'replay/markers'
+REPLAY_GOAL = 'replay/goal_pose'
+POSE_STAMPED_TYPE = 'geometry_msgs/msg/PoseStamped'
+REPLAY_TOPIC_TYPES = {REPLAY_MARKERS: MARKER_ARRAY_TYPE, REPLAY_GOAL: POSE_STAMPED_TYPE}
+
 # Evaluation.status (the constants of Evaluation.msg)
 STATUS_OK = 0
 STATUS_REJECTED = 1
@@ -47,3 +64,5 @@ STATUS_NAMES = {STATUS_OK: 'ok', STATUS_REJECTED: 'rejected'}
 # The recorder logs a line starting with this once its subscriptions exist; a runner waits
 # for it before starting the optimizer.
 RECORDER_READY = 'recorder ready'
+# The live view (`hand-codesign run --live`) logs this, then ': ws://HOST:PORT', once it serves.
+LIVE_READY = 'live view ready'

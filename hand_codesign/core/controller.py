@@ -6,7 +6,9 @@ the summaries. It is driven by what the optimizer hears (`heard_from` a heartbea
 `evaluated`, `rejected`) and by `tick()`, and answers through an outbox with four methods:
 
     send_candidate(candidate, evaluator_id, attempt, genome_names, world_states)
-    send_summary(summary)          # a core.summary mapping; the last one has final=True
+    send_summary(summary)          # a core.summary mapping; the last one has final=True;
+                                   # its 'best_design' holds the best design so far as
+                                   # core.geometry Shapes, for a 3D viewer
     log(text, level='info')        # a line for whoever watches the run ('warning')
     finish(result)                 # the run ended; result is the record of `result.json`
 
@@ -30,6 +32,7 @@ import time
 
 from hand_codesign.core.dispatch import Dispatcher
 from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.geometry import design_shapes
 from hand_codesign.core.runs import library_versions
 from hand_codesign.core.search import Search
 from hand_codesign.core.summary import generation_summary
@@ -164,6 +167,7 @@ class RunController:
         summary = generation_summary(
             generation, structure, self.task.objective_names, told_ids, objectives,
             optimizer.result, self.told, elapsed, checking, horizon)
+        summary['best_design'] = self.best_design(structure, optimizer.result.x)
         self.outbox.send_summary(summary)
         if checking:
             self.outbox.log(
@@ -191,9 +195,14 @@ class RunController:
             told_objectives=np.zeros((0, len(names))), wall_time=self.clock() - self.started,
             structure=structure, best_id=result.candidate_id,
             best_objectives=result.objectives, best_fitness=result.fitness,
-            best_x=result.x))
+            best_x=result.x, best_design=self.best_design(structure, result.x)))
         self.outbox.log(f'run {self.run_id} finished ({stop_reason})')
         self.outbox.finish(self._result(result, structure, stop_reason))
+
+    def best_design(self, structure, x):
+        """Return the core.geometry Shapes of the design of genome x of a hand structure."""
+        task = self.task.replace(structure=structure)
+        return design_shapes(task, genome_spec(task).decode(x))
 
     def _result(self, result, structure, stop_reason):
         return {

@@ -1,9 +1,18 @@
-"""Conversions between hand_codesign.core objects and hand_codesign_msgs messages."""
+"""Conversions between hand_codesign.core objects and messages (ours, and standard ones)."""
 
+from geometry_msgs.msg import Point
+from hand_codesign.core.contract import WORLD_FRAME
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import GenerationSummary
 import numpy as np
+from std_msgs.msg import ColorRGBA
+from visualization_msgs.msg import Marker
+from visualization_msgs.msg import MarkerArray
+
+# core.geometry's shape kinds -> Marker types
+MARKER_TYPES = {'arrow': Marker.ARROW, 'box': Marker.CUBE, 'sphere': Marker.SPHERE,
+                'cylinder': Marker.CYLINDER}
 
 
 def stamp_now(node):
@@ -70,3 +79,37 @@ def summary_message(run_id, summary):
         told_ids=summary['told_ids'], told_objectives=float_list(summary['told_objectives']),
         evaluations=int(summary['evaluations']), wall_time=float(summary['wall_time']),
         final=bool(summary['final']), stop_reason=summary['stop_reason'])
+
+
+def shape_marker(shape, number, stamp, frame_id=WORLD_FRAME):
+    """Return the Marker of a core.geometry Shape; `number` is its id within its group."""
+    marker = Marker(ns=shape.group, id=int(number), type=MARKER_TYPES[shape.kind],
+                    action=Marker.ADD, frame_locked=False)
+    marker.header.frame_id = frame_id
+    marker.header.stamp = stamp
+    position, orientation = marker.pose.position, marker.pose.orientation
+    position.x, position.y, position.z = (float(v) for v in shape.position)
+    orientation.x, orientation.y, orientation.z, orientation.w = (
+        float(v) for v in shape.orientation)
+    marker.scale.x, marker.scale.y, marker.scale.z = (float(v) for v in shape.size)
+    marker.color = ColorRGBA(**dict(zip('rgba', (float(v) for v in shape.colour))))
+    marker.points = [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in shape.points]
+    return marker
+
+
+def markers_message(shapes, stamp, frame_id=WORLD_FRAME):
+    """
+    Return the MarkerArray drawing core.geometry Shapes, numbered within each group.
+
+    It starts with a DELETEALL marker, so that a viewer drops the shapes of the previous
+    array (a design of another structure has another number of segments).
+    """
+    clear = Marker(action=Marker.DELETEALL)
+    clear.header.frame_id = frame_id
+    clear.header.stamp = stamp
+    counts = {}
+    markers = [clear]
+    for shape in shapes:
+        number = counts[shape.group] = counts.get(shape.group, -1) + 1
+        markers.append(shape_marker(shape, number, stamp, frame_id))
+    return MarkerArray(markers=markers)

@@ -2,9 +2,8 @@
 The optimizer node: the run's RunController (hand_codesign.core.controller) over ROS 2.
 
 It announces the run (RunInfo, latched), turns heartbeats and evaluations into calls of the
-controller and the controller's candidates and summaries into messages. Its parameters are
-read once, at start. Resuming needs the bag read: `main` takes the function that does it
-(`load_resume`) from hand_codesign.commands.optimizer, which the `optimizer` executable runs.
+controller and its candidates, summaries and best designs (markers) into messages. Resuming
+reads the bag with `main`'s `load_resume` (from hand_codesign.commands.optimizer).
 """
 
 import sys
@@ -19,6 +18,7 @@ from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import candidate_message
+from hand_codesign.ros.conversions import markers_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.conversions import summary_message
 from hand_codesign.ros.parameters import declare_read_only
@@ -77,8 +77,8 @@ class OptimizerNode(Node):
             self.settings['heartbeat_timeout'], self.settings['evaluation_timeout'],
             self.settings['evaluators_expected'])
         self.publishers_ = {name: self.create_publisher(
-            topics.MESSAGE_TYPES[name], name, topics.QOS[name]) for name in (
-                topics.RUN_INFO, topics.CANDIDATES, topics.GENERATION_SUMMARY)}
+            topics.RECORDED_MESSAGE_TYPES[name], name, topics.QOS[name])
+            for name in topics.OPTIMIZER_TOPICS}
         self.published = dict.fromkeys(self.publishers_, 0)
         for name, callback in ((topics.EVALUATIONS, self.on_evaluation),
                                (topics.EVALUATOR_STATUS, self.on_status)):
@@ -115,6 +115,7 @@ class OptimizerNode(Node):
 
     def send_summary(self, summary):
         self.publish(topics.GENERATION_SUMMARY, summary_message(self.run.run_id, summary))
+        self.publish(topics.BEST_DESIGN, markers_message(summary['best_design'], stamp_now(self)))
 
     def log(self, text, level='info'):
         getattr(self.get_logger(), level)(text)

@@ -46,7 +46,7 @@ class Recorder(Node):
         self.subscriptions_by_topic = {}
         for name in self.settings['topics']:
             subscription = self.create_subscription(
-                topics.MESSAGE_TYPES[name], name, self._record_callback(name),
+                topics.RECORDED_MESSAGE_TYPES[name], name, self._record_callback(name),
                 recorder_qos(topics.QOS[name]), raw=True)
             self.subscriptions_by_topic[subscription.topic_name] = subscription
         self.flush_timer = self.create_timer(self.settings['flush_period'], self.flush)
@@ -56,7 +56,7 @@ class Recorder(Node):
 
     def _record_callback(self, name):
         """Return the raw subscription callback that writes the messages of topic name."""
-        type_name = topics.type_name(topics.MESSAGE_TYPES[name])
+        type_name = topics.type_name(topics.RECORDED_MESSAGE_TYPES[name])
         declared_qos = topics.QOS[name]
         # The resolved (absolute) name is known once the subscription exists.
         resolved = []

@@ -21,8 +21,9 @@ PARAMETERS = {
     'bag_path': ('', 'Bag to write: a path ending in .mcap is one MCAP file, any other path a '
                      'rosbag2 bag directory (with metadata.yaml). Must not exist. Empty: '
                      'hand_codesign_<date>-<time>.mcap in the working directory.', None),
-    'topics': (list(topics.MESSAGE_TYPES), 'Relative names of the topics to record; each '
-               'must be a topic of the co-design loop (hand_codesign.ros.topics).', None),
+    'topics': (list(topics.RECORDED_MESSAGE_TYPES), 'Relative names of the topics to record; '
+               'each must be a topic of the co-design loop or its view '
+               '(hand_codesign.ros.topics).', None),
     'flush_period': (1.0, 'Seconds between flushes of the chunk in progress to disk: at most '
                           'this much is lost if the recorder is killed with SIGKILL.', None),
 }
@@ -49,18 +50,18 @@ def default_bag_path():
 
 def open_bag(settings):
     """Check the recorder's parameters and return a new BagWriter; raise RecorderError."""
-    unknown = [name for name in settings['topics'] if name not in topics.MESSAGE_TYPES]
+    unknown = [name for name in settings['topics'] if name not in topics.RECORDED_MESSAGE_TYPES]
     if unknown:
         raise RecorderError(
             f'parameter topics: {unknown} are not topics of the co-design loop; expected '
-            f'names among {list(topics.MESSAGE_TYPES)}')
+            f'names among {list(topics.RECORDED_MESSAGE_TYPES)}')
     if settings['flush_period'] <= 0.0:
         raise RecorderError(
             f'parameter flush_period: expected a positive number of seconds, got '
             f'{settings["flush_period"]}')
     for name in settings['topics']:
         try:
-            message_definition(topics.type_name(topics.MESSAGE_TYPES[name]))
+            message_definition(topics.type_name(topics.RECORDED_MESSAGE_TYPES[name]))
         except DefinitionError as error:
             raise RecorderError(f'topic {name}: {error}') from None
     try:

@@ -1,9 +1,10 @@
 """
 The processes of a run on an isolated ROS 2 domain (`hand-codesign run`, hand_codesign.commands).
 
-Starts the recorder first and waits until it is ready, then the evaluators and the optimizer;
-relays the optimizer's progress; when the optimizer ends (or on Ctrl-C) stops the evaluators,
-then the recorder, so that the bag holds every message and is closed properly.
+Starts the recorder first and waits until it is ready (and the live view for Foxglove, when
+asked for), then the evaluators and the optimizer; relays the optimizer's progress; when the
+optimizer ends (or on Ctrl-C) stops the evaluators, then the recorder and the live view, so
+that the bag holds every message and is closed properly.
 
 Evaluators on other hosts can join a run: start them with the run's ROS_DOMAIN_ID (printed at
 the start) and a discovery range that reaches this host, e.g.
@@ -19,6 +20,7 @@ import sys
 import threading
 import time
 
+from hand_codesign.core.contract import LIVE_READY
 from hand_codesign.core.contract import RECORDER_READY
 from hand_codesign.errors import UserError
 
@@ -47,11 +49,14 @@ def claimed_domain(requested):
 
 
 class System:
-    """The processes of one run: recorder, evaluators and optimizer."""
+    """The processes of one run: recorder, evaluators and optimizer, and maybe a live view."""
 
-    def __init__(self, bag, domain_id, quiet=False):
+    def __init__(self, bag, domain_id, quiet=False, live=None):
+        """live: None, or the (host, port) the live view serves Foxglove on."""
         self.bag = bag
         self.quiet = quiet
+        self.live = live
+        self.live_view = None
         self.environment = dict(
             os.environ, ROS_DOMAIN_ID=str(domain_id), PYTHONUNBUFFERED='1',
             ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE',
@@ -78,6 +83,8 @@ class System:
     def run(self, evaluators, optimizer_module, optimizer_parameters):
         """Run recorder, evaluators and optimizer until the optimizer ends; return its code."""
         self.start_recorder()
+        if self.live is not None:
+            self.start_live_view()
         logs = self.bag / 'logs'
         logs.mkdir()
         for index in range(evaluators):
@@ -98,18 +105,30 @@ class System:
     def start_recorder(self):
         self.recorder = self.node('hand_codesign.ros.recorder_node', {'bag_path': self.bag},
                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.wait_until_ready(self.recorder, RECORDER_READY, 'the recorder')
+
+    def start_live_view(self):
+        host, port = self.live
+        self.live_view = self.node('hand_codesign.ros.live_node', {'host': host, 'port': port},
+                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        line = self.wait_until_ready(self.live_view, LIVE_READY, 'the live view')
+        address = line.split(LIVE_READY + ': ', 1)[-1].split()[0]
+        self.say(f'live: {address} (in Foxglove: Open connection, Foxglove WebSocket; layout '
+                 'config/foxglove_layout.json)')
+
+    def wait_until_ready(self, process, ready, what):
+        """Return the line of a starting process that says `ready`; then drain its output."""
         deadline = time.monotonic() + 60.0
         lines = []
-        for line in self.recorder.stdout:
+        for line in process.stdout:
             lines.append(line)
-            if RECORDER_READY in line:
+            if ready in line or time.monotonic() > deadline:
                 break
-            if time.monotonic() > deadline:
-                break
-        if self.recorder.poll() is not None or not any(RECORDER_READY in x for x in lines):
+        if process.poll() is not None or not lines or ready not in lines[-1]:
             self.stop_all()
-            raise UserError('the recorder did not start:\n' + ''.join(lines[-20:]))
-        threading.Thread(target=self.recorder.stdout.read, daemon=True).start()
+            raise UserError(f'{what} did not start:\n' + ''.join(lines[-20:]))
+        threading.Thread(target=process.stdout.read, daemon=True).start()
+        return lines[-1]
 
     def relay_optimizer(self):
         for line in self.optimizer.stdout:
@@ -130,7 +149,7 @@ class System:
     def stop_all(self):
         """Stop optimizer and evaluators first, the recorder last: it takes what is in flight."""
         stop([self.optimizer] + self.evaluators)
-        stop([self.recorder])
+        stop([self.recorder, self.live_view])
 
 
 def stop(processes):

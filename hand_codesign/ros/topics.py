@@ -10,6 +10,7 @@ subscriber that matches late (a recorder, an evaluator started by hand) still re
 was published before it matched.
 """
 
+from hand_codesign.core.contract import BEST_DESIGN
 from hand_codesign.core.contract import CANDIDATES
 from hand_codesign.core.contract import EVALUATIONS
 from hand_codesign.core.contract import EVALUATOR_STATUS
@@ -24,6 +25,7 @@ from rclpy.qos import DurabilityPolicy
 from rclpy.qos import HistoryPolicy
 from rclpy.qos import QoSProfile
 from rclpy.qos import ReliabilityPolicy
+from visualization_msgs.msg import MarkerArray
 
 # Deep enough for several generations of the largest population of Table I (250).
 HISTORY_DEPTH = 4096
@@ -51,12 +53,20 @@ MESSAGE_TYPES = {
     GENERATION_SUMMARY: GenerationSummary,
 }
 
+# What a 3D viewer draws (core.contract.VIEW_TOPIC_TYPES), and every topic a bag records.
+VIEW_MESSAGE_TYPES = {BEST_DESIGN: MarkerArray}
+RECORDED_MESSAGE_TYPES = {**MESSAGE_TYPES, **VIEW_MESSAGE_TYPES}
+# what the optimizer node publishes
+OPTIMIZER_TOPICS = (RUN_INFO, CANDIDATES, GENERATION_SUMMARY, BEST_DESIGN)
+
 QOS = {
     RUN_INFO: LOOP_QOS,
     CANDIDATES: LOOP_QOS,
     EVALUATIONS: LOOP_QOS,
     EVALUATOR_STATUS: STATUS_QOS,
     GENERATION_SUMMARY: LOOP_QOS,
+    # one per summary, like the summaries: a late viewer or recorder gets them all
+    BEST_DESIGN: LOOP_QOS,
 }
 
 

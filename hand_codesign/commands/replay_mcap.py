@@ -1,0 +1,89 @@
+"""
+One world's rollout of a recorded design as a ROS 2 MCAP that Foxglove plays back in 3D.
+
+The file is a ROS 2 bag of standard messages (profile ros2, ros2msg schemas with their
+dependencies, cdr messages, closed with its summary and footer), written like a run's bag by
+hand_codesign.ros.mcap_writer. Per frame of the animation (25 per simulated second):
+
+- contract.REPLAY_MARKERS, visualization_msgs/MarkerArray: the hand drawn from its simulated
+  link frames with core.geometry's shapes (the very shapes of the best_design topic), the
+  object at its simulated pose, a translucent copy of it at every goal pose;
+- contract.REPLAY_GOAL, geometry_msgs/PoseStamped: the goal in effect (the next one due,
+  after the last one the last one).
+
+Messages are stamped (header and log time) with the simulated time from 0, so Foxglove's
+timeline is the rollout's. They are built by ros.conversions and serialized by rclpy, like
+the markers the optimizer node publishes: one path from shapes to bytes (rosbags or
+mcap-ros2-support could serialize them without rclpy, but a second conversion would have to
+be kept equal to the first).
+"""
+
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import PoseStamped
+from hand_codesign.analysis.replay import rollout_poses
+from hand_codesign.core import contract
+from hand_codesign.core.geometry import GOAL_COLOUR
+from hand_codesign.core.geometry import goal_poses
+from hand_codesign.core.geometry import hand_shapes
+from hand_codesign.core.geometry import object_shapes
+from hand_codesign.core.worlds import object_state
+from hand_codesign.errors import UserError
+from hand_codesign.ros.conversions import markers_message
+from hand_codesign.ros.mcap_writer import BagWriteError
+from hand_codesign.ros.mcap_writer import BagWriter
+from hand_codesign.ros.topics import LOOP_QOS
+from rclpy.serialization import serialize_message
+
+NANOSECONDS = 1_000_000_000
+
+
+def write_rollout_mcap(path, task, design, world):
+    """Write one world's rollout of a RecordedDesign as a ROS 2 MCAP; return its frames."""
+    if path.exists():
+        raise UserError(f'--mcap {path}: already exists; choose a new file')
+    model, palm, frames = rollout_poses(task, design, world)
+    state = object_state(task, world)
+    goals = goal_poses(task, state) or [(0.0, state.position, state.orientation)]
+    shape = task.object_spec.shape
+    ghosts = [ghost for _, position, orientation in goals for ghost in object_shapes(
+        shape, state.size, (position, orientation), 'goals', GOAL_COLOUR)]
+    try:
+        with BagWriter(path) as bag:
+            for topic, type_name in contract.REPLAY_TOPIC_TYPES.items():
+                bag.add_topic('/' + topic, type_name, [LOOP_QOS])
+            for time, links, object_pose in frames:
+                stamp = int(round(time * NANOSECONDS))
+                shapes = (hand_shapes(model, palm, links)
+                          + object_shapes(shape, state.size, object_pose) + ghosts)
+                bag.write('/' + contract.REPLAY_MARKERS,
+                          serialize_message(markers_message(shapes, ros_time(stamp))),
+                          log_time=stamp)
+                bag.write('/' + contract.REPLAY_GOAL,
+                          serialize_message(goal_message(current_goal(goals, time), stamp)),
+                          log_time=stamp)
+    except BagWriteError as error:
+        raise UserError(f'--mcap {path}: {error}') from None
+    return len(frames)
+
+
+def current_goal(goals, time):
+    """Return the goal (time, position, orientation) in effect at `time`: the next one due."""
+    return next((goal for goal in goals if goal[0] >= time - 1e-9), goals[-1])
+
+
+def ros_time(nanoseconds):
+    """Return the builtin_interfaces/Time of a number of nanoseconds."""
+    return Time(sec=nanoseconds // NANOSECONDS, nanosec=nanoseconds % NANOSECONDS)
+
+
+def goal_message(goal, stamp):
+    """Return the PoseStamped of a goal (time, position, orientation), stamped at `stamp` ns."""
+    message = PoseStamped()
+    message.header.frame_id = contract.WORLD_FRAME
+    message.header.stamp = ros_time(stamp)
+    _, position, orientation = goal
+    pose = message.pose
+    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in position)
+    pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = (
+        float(v) for v in orientation)
+    return message
