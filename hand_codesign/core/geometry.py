@@ -26,7 +26,7 @@ from typing import Tuple
 
 from hand_codesign.core.hand import hand_model
 from hand_codesign.core.objectives import goal_schedule
-from hand_codesign.core.objectives import quaternion_multiply
+from hand_codesign.core.rotations import axis_angle_quaternion, compose, rotate
 from hand_codesign.core.worlds import object_state
 from hand_codesign.core.worlds import WorldState
 
@@ -60,30 +60,6 @@ class Shape:
     points: Tuple[Tuple[float, float, float], ...] = ()
 
 
-def rotate(quaternion, vector):
-    """Return a vector turned by a unit quaternion (x, y, z, w)."""
-    x, y, z, w = quaternion
-    turned = quaternion_multiply(quaternion_multiply(quaternion, (*vector, 0.0)),
-                                 (-x, -y, -z, w))
-    return tuple(float(v) for v in turned[:3])
-
-
-def compose(first, second):
-    """Return the pose `second` (given in the frame `first`) in the frame of `first`'s parent."""
-    (p1, q1), (p2, q2) = first, second
-    moved = rotate(q1, p2)
-    orientation = quaternion_multiply(q1, q2)
-    return (tuple(float(a + b) for a, b in zip(p1, moved)),
-            tuple(float(v) for v in orientation))
-
-
-def axis_angle(axis, angle):
-    """Return the unit quaternion of a turn by angle (rad) about a unit axis."""
-    half = angle / 2
-    return (axis[0] * math.sin(half), axis[1] * math.sin(half), axis[2] * math.sin(half),
-            math.cos(half))
-
-
 def link_frames(model, base_pose, angles=None):
     """
     Return the world pose of every link frame of a HandModel, in link order.
@@ -96,7 +72,7 @@ def link_frames(model, base_pose, angles=None):
     for link, angle in zip(model.links, angles):
         parent = base_pose if link.parent < 0 else frames[link.parent]
         frames.append(compose(parent, (link.joint_position,
-                                       axis_angle(link.joint_axis, angle))))
+                                       axis_angle_quaternion(link.joint_axis, angle))))
     return frames
 
 

@@ -57,3 +57,20 @@ def slerp(start, end, fraction):
         result = (math.sin((1.0 - fraction) * angle) * start
                   + math.sin(fraction * angle) * end) / math.sin(angle)
     return result / np.linalg.norm(result)
+
+
+def rotate(quaternion, vector):
+    """Return a vector turned by a unit quaternion (x, y, z, w)."""
+    x, y, z, w = quaternion
+    turned = quaternion_multiply(quaternion_multiply(quaternion, (*vector, 0.0)),
+                                 (-x, -y, -z, w))
+    return tuple(float(v) for v in turned[:3])
+
+
+def compose(first, second):
+    """Return the pose `second` (given in the frame `first`) in the frame of `first`'s parent."""
+    (p1, q1), (p2, q2) = first, second
+    moved = rotate(q1, p2)
+    orientation = quaternion_multiply(q1, q2)
+    return (tuple(float(a + b) for a, b in zip(p1, moved)),
+            tuple(float(v) for v in orientation))
