@@ -14,12 +14,18 @@ from hand_codesign.core.contract import CANDIDATES
 from hand_codesign.core.contract import EVALUATIONS
 from hand_codesign.core.contract import EVALUATOR_STATUS
 from hand_codesign.core.contract import GENERATION_SUMMARY
+from hand_codesign.core.contract import OBJECT_POSE
 from hand_codesign.core.contract import RUN_INFO
+from hand_codesign.core.contract import TRIAL_REQUESTS
+from hand_codesign.core.contract import TRIAL_STATUS
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import EvaluatorStatus
 from hand_codesign_msgs.msg import GenerationSummary
+from geometry_msgs.msg import PoseStamped
 from hand_codesign_msgs.msg import RunInfo
+from hand_codesign_msgs.msg import TrialRequest
+from hand_codesign_msgs.msg import TrialStatus
 from rclpy.qos import DurabilityPolicy
 from rclpy.qos import HistoryPolicy
 from rclpy.qos import QoSProfile
@@ -43,12 +49,24 @@ STATUS_QOS = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )
 
+# A rig's trials: every pose of a trace matters (the evaluator scores it) and none is worth
+# anything after its trial, so the history is deep and nothing is kept for late joiners.
+RIG_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=HISTORY_DEPTH,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+
 MESSAGE_TYPES = {
     RUN_INFO: RunInfo,
     CANDIDATES: Candidate,
     EVALUATIONS: Evaluation,
     EVALUATOR_STATUS: EvaluatorStatus,
     GENERATION_SUMMARY: GenerationSummary,
+    TRIAL_REQUESTS: TrialRequest,
+    TRIAL_STATUS: TrialStatus,
+    OBJECT_POSE: PoseStamped,
 }
 
 QOS = {
@@ -57,6 +75,9 @@ QOS = {
     EVALUATIONS: LOOP_QOS,
     EVALUATOR_STATUS: STATUS_QOS,
     GENERATION_SUMMARY: LOOP_QOS,
+    TRIAL_REQUESTS: RIG_QOS,
+    TRIAL_STATUS: RIG_QOS,
+    OBJECT_POSE: RIG_QOS,
 }
 
 
