@@ -35,10 +35,13 @@ the samples around every check. Early termination can still switch at a
 check whose pose is within the tolerance of a margin; the bound does not hold across that.
 """
 
+import collections
 from dataclasses import dataclass
 from typing import Optional, Tuple
 
 from hand_codesign.core.evaluate import Evaluation
+from hand_codesign.core.evaluation_jobs import CandidateRejected, EvaluatorInbox
+from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
                                            orientation_angle, slerp, task_torque_penalty,
                                            weighted_fitness)
@@ -208,8 +211,8 @@ class RigTrials:
             self._reject(f'the rig failed: {reason or "no reason given"}')
 
     def pose(self, stamp_ns, position, orientation):
-        """A measured pose of the object, stamped in the rig's clock."""
-        if self.trial is not None and self.trial.start_ns is not None:
+        """A measured pose of the object, stamped in the rig's clock (may precede the start)."""
+        if self.trial is not None:
             self.trial.samples.append((int(stamp_ns), tuple(position), tuple(orientation)))
 
     def ended(self, trial_id, stamp_ns, now):
@@ -250,7 +253,8 @@ class RigTrials:
         return ('request', self.trial.trial_id, spec)
 
     def _score(self, trial):
-        samples = sorted(trial.samples)
+        samples = sorted(sample for sample in trial.samples
+                         if trial.start_ns <= sample[0] <= trial.end_ns)
         times = np.array([(stamp - trial.start_ns) * 1e-9 for stamp, _, _ in samples])
         positions = np.array([sample[1] for sample in samples]).reshape(-1, 3)
         orientations = np.array([sample[2] for sample in samples]).reshape(-1, 4)
@@ -282,3 +286,92 @@ class RigTrials:
                           unstable_worlds=0, simulated_time=measured,
                           initial_errors=empty, final_errors=empty.copy(),
                           final_poses=np.zeros((len(self.specs), 7)))
+
+
+class RigEvaluator:
+    """
+    A rig evaluator's decisions without ROS: which candidates, and the trials of each in turn.
+
+    Candidates are taken by the EvaluatorInbox rules of every evaluator and evaluated one
+    after another (a rig runs one trial at a time). Feed it messages (`run_announced`,
+    `candidate_arrived`, the rig's `started` / `collided` / `failed` / `ended` and `pose`)
+    and call `poll(now)`, which returns actions: ('request', candidate, trial id, TrialSpec),
+    ('evaluated', candidate, Evaluation, wall seconds) or ('rejected', candidate, reason).
+    """
+
+    def __init__(self, evaluator_id, wanted_run='', **limits):
+        self.inbox = EvaluatorInbox(evaluator_id, wanted_run)
+        self.limits = limits  # start_timeout, end_margin, max_gap, settle of RigTrials
+        self.queue = collections.deque()
+        self.current = None  # (candidate, RigTrials, started at)
+        self.next_trial_id = 1
+        self.done = 0
+
+    def run_announced(self, run):
+        """Take a RunInfo (and the candidates that waited for it)."""
+        self.queue.extend(self.inbox.run_announced(run))
+
+    def candidate_arrived(self, candidate):
+        """Queue a candidate if it is for this evaluator."""
+        self.queue.extend(self.inbox.candidate_arrived(candidate))
+
+    def load(self):
+        """Return the candidates taken and not answered yet."""
+        return len(self.queue) + (self.current is not None)
+
+    def _trials(self):
+        return None if self.current is None else self.current[1]
+
+    def started(self, trial_id, stamp_ns):
+        """Forward the rig's start of a trial to the candidate in progress."""
+        if self._trials():
+            self._trials().started(trial_id, stamp_ns)
+
+    def collided(self, trial_id):
+        """Forward a start collision."""
+        if self._trials():
+            self._trials().collided(trial_id)
+
+    def failed(self, trial_id, reason):
+        """Forward a failed trial."""
+        if self._trials():
+            self._trials().failed(trial_id, reason)
+
+    def ended(self, trial_id, stamp_ns, now):
+        """Forward the end of a trial."""
+        if self._trials():
+            self._trials().ended(trial_id, stamp_ns, now)
+
+    def pose(self, stamp_ns, position, orientation):
+        """Forward a measured pose."""
+        if self._trials():
+            self._trials().pose(stamp_ns, position, orientation)
+
+    def poll(self, now):
+        """Return the actions due now (see the class doc)."""
+        actions = [('rejected', candidate, f'no RunInfo received for run "{candidate.run_id}"')
+                   for candidate in self.inbox.orphans()]
+        while self.current is None and self.queue:
+            candidate = self.queue.popleft()
+            try:
+                job = self.inbox.job(candidate)
+                design = genome_spec(job.task).decode(job.genome)
+            except CandidateRejected as reason:
+                actions.append(('rejected', candidate, str(reason)))
+                continue
+            trials = RigTrials(job.task, design, job.worlds, self.next_trial_id, **self.limits)
+            self.current = (candidate, trials, now)
+        if self.current is None:
+            return actions
+        candidate, trials, since = self.current
+        action = trials.poll(now)
+        if action is None:
+            return actions
+        if action[0] == 'request':
+            self.next_trial_id = trials.next_id
+            return actions + [('request', candidate, action[1], action[2])]
+        self.current = None
+        self.done += 1
+        if action[0] == 'evaluated':
+            return actions + [('evaluated', candidate, action[1], now - since)]
+        return actions + [('rejected', candidate, action[1])]

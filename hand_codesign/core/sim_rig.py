@@ -19,9 +19,12 @@ seeded generator.
 from dataclasses import dataclass
 import math
 
+from hand_codesign.core.evaluation_jobs import candidate_task, CandidateRejected
 from hand_codesign.core.hand import hand_model
 from hand_codesign.core.objectives import goal_schedule, quaternion_multiply
+from hand_codesign.core.physical import design_from_physical
 from hand_codesign.core.policies import make_policy
+from hand_codesign.core.rig import TrialSpec
 from hand_codesign.core.sim import object_shape, Simulator
 from hand_codesign.core.worlds import ObjectState
 import numpy as np
@@ -104,3 +107,29 @@ class SimulatedRig:
             turn = (*(axis * math.sin(angle / 2)), math.cos(angle / 2))
             orientation = quaternion_multiply(turn, orientation)
         return tuple(position), tuple(orientation)
+
+
+def requested_trial(run, candidate, request):
+    """
+    Return (task, Design, TrialSpec) of a TrialRequest for a Candidate of run (a RunInfo).
+
+    The Design comes from the Candidate's physical fields; the task gives what the rig
+    itself is (hand sizes, time step, policy timing). ValueError says why it cannot run.
+    """
+    if not candidate.design_names:
+        raise ValueError(f'candidate {candidate.candidate_id} carries no physical design '
+                         '(design_names is empty)')
+    try:
+        task, _ = candidate_task(run, candidate)
+    except CandidateRejected as error:
+        raise ValueError(str(error)) from None
+    design = design_from_physical(candidate.structure, candidate.design_names,
+                                  candidate.design_values, candidate.controller_kind,
+                                  candidate.controller_values, candidate.controller_kp,
+                                  candidate.controller_kd)
+    spec = TrialSpec(world=request.world, worlds=request.worlds, shape=request.object_shape,
+                     size=tuple(request.object_size), scale=request.object_scale,
+                     position=tuple(request.object_position),
+                     orientation=tuple(request.object_orientation), mass=request.object_mass,
+                     friction=request.object_friction, duration=request.duration)
+    return task, design, spec

@@ -17,19 +17,32 @@ def float_list(values):
 
 
 def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, attempt,
-                      world_states=0):
+                      world_states=0, design=None):
     """
     Return the Candidate message sending an optimizer's candidate to an evaluator.
 
     world_states: 0 evaluates it on the run's worlds; more for a hierarchy structure's check.
+    design: its core.physical.PhysicalDesign, for evaluators that do not decode genomes.
     """
-    return Candidate(
+    message = Candidate(
         run_id=run_id, generation=int(candidate.generation),
         candidate_id=int(candidate.candidate_id),
         evaluator_id=evaluator_id, attempt=int(attempt),
         structure=[int(joints) for joints in structure], genome=float_list(candidate.x),
         horizon=float(getattr(candidate, 'horizon', 0.0)),
         genome_names=list(genome_names), world_states=int(world_states))
+    if design is not None:
+        message.design_names = list(design.names)
+        message.design_values = list(design.values)
+        message.hand_urdf = design.urdf
+        message.controller_kind = design.controller_kind
+        message.controller_mode = design.controller_mode
+        message.gravity_compensation = design.gravity_compensation
+        message.controller_knot_times = list(design.knot_times)
+        message.controller_values = list(design.controller_values)
+        message.controller_kp = list(design.kp)
+        message.controller_kd = list(design.kd)
+    return message
 
 
 def evaluation_message(candidate, evaluator_id, evaluation):

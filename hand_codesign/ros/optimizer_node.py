@@ -108,10 +108,11 @@ class OptimizerNode(Node):
         else:
             self.run.evaluated(*key, message.objectives, message.wall_time)
 
-    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states):
+    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states,
+                       design):
         self.publish(topics.CANDIDATES, candidate_message(
             self.run.run_id, candidate, candidate.structure, genome_names, evaluator_id,
-            attempt, world_states))
+            attempt, world_states, design))
 
     def send_summary(self, summary):
         self.publish(topics.GENERATION_SUMMARY, summary_message(self.run.run_id, summary))
