@@ -43,8 +43,7 @@ from hand_codesign.core.evaluate import Evaluation
 from hand_codesign.core.evaluation_jobs import CandidateRejected, EvaluatorInbox
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
-                                           orientation_angle, slerp, task_torque_penalty,
-                                           weighted_fitness)
+                                           slerp, task_torque_penalty, weighted_fitness)
 from hand_codesign.core.worlds import object_state, world_states
 import numpy as np
 
@@ -194,29 +193,29 @@ class RigTrials:
         return self.trial is not None and self.trial.trial_id == trial_id
 
     def started(self, trial_id, stamp_ns):
-        """The rig started the trial: t = 0 at stamp_ns (the clock of its poses)."""
+        """Take the rig's start of the trial: t = 0 at stamp_ns (the clock of its poses)."""
         if self._current(trial_id) and self.trial.start_ns is None:
             self.trial.start_ns = int(stamp_ns)
 
     def collided(self, trial_id):
-        """The hand started in collision: every objective is the collision penalty."""
+        """Take a start collision: every objective is the collision penalty."""
         if self._current(trial_id) and self.outcome is None:
             values = np.full((len(self.specs), self.schedule.num_objectives),
                              COLLISION_PENALTY)
             self.outcome = ('evaluated', self._evaluation(values, True), self.traces)
 
     def failed(self, trial_id, reason):
-        """The rig could not run the trial."""
+        """Take the rig's report that it could not run the trial."""
         if self._current(trial_id) and self.outcome is None:
             self._reject(f'the rig failed: {reason or "no reason given"}')
 
     def pose(self, stamp_ns, position, orientation):
-        """A measured pose of the object, stamped in the rig's clock (may precede the start)."""
+        """Take a measured pose of the object, stamped in the rig's clock (may come first)."""
         if self.trial is not None:
             self.trial.samples.append((int(stamp_ns), tuple(position), tuple(orientation)))
 
     def ended(self, trial_id, stamp_ns, now):
-        """The rig says the trial ended at stamp_ns; poses may still be on their way."""
+        """Take the trial's end at stamp_ns; its last poses may still be on their way."""
         if self._current(trial_id) and self.trial.start_ns is not None:
             self.trial.end_ns, self.trial.ended_at = int(stamp_ns), now
 

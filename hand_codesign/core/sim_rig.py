@@ -12,8 +12,8 @@ The rig knows nothing of the goals: its rollout is the task's without early term
 horizon (the same physics up to any check; it runs to the task's last goal). Sample times:
 every physics step (`rate` 0), or at `rate` Hz with a `phase` (a fraction of a sample period:
 a motion capture clock is not synchronized with the trial), each sample taken at the physics
-step nearest to it and stamped with that step's time, and at the trial's end. Optional Gaussian noise (m, rad) from a
-seeded generator.
+step nearest to it and stamped with that step's time, and at the trial's end. Optional
+Gaussian noise (m, rad) from a seeded generator.
 """
 
 from dataclasses import dataclass
@@ -38,7 +38,7 @@ class SampleClock:
     phase: float = 0.0
 
     def steps(self, time_step, num_steps):
-        """Return the set of physics steps (0 .. num_steps) at which a pose is published."""
+        """Return the set of physics steps, 0 to num_steps, at which a pose is published."""
         if self.rate <= 0:
             return set(range(num_steps + 1))
         period = 1.0 / self.rate

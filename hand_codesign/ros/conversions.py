@@ -3,6 +3,7 @@
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import GenerationSummary
+from hand_codesign_msgs.msg import TrialRequest
 import numpy as np
 
 
@@ -83,3 +84,15 @@ def summary_message(run_id, summary):
         told_ids=summary['told_ids'], told_objectives=float_list(summary['told_objectives']),
         evaluations=int(summary['evaluations']), wall_time=float(summary['wall_time']),
         final=bool(summary['final']), stop_reason=summary['stop_reason'])
+
+
+def trial_request(candidate, evaluator_id, trial_id, spec):
+    """Return the TrialRequest of one trial (a core.rig.TrialSpec) of a candidate."""
+    return TrialRequest(
+        run_id=candidate.run_id, candidate_id=candidate.candidate_id,
+        attempt=candidate.attempt, evaluator_id=evaluator_id, trial_id=int(trial_id),
+        world=spec.world, worlds=spec.worlds, object_shape=spec.shape,
+        object_size=list(spec.size), object_scale=float(spec.scale),
+        object_position=list(spec.position), object_orientation=list(spec.orientation),
+        object_mass=float(spec.mass), object_friction=float(spec.friction),
+        duration=float(spec.duration))

@@ -20,9 +20,9 @@ from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import evaluation_message
 from hand_codesign.ros.conversions import rejection_message
 from hand_codesign.ros.conversions import stamp_now
+from hand_codesign.ros.conversions import trial_request
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import EvaluatorStatus
-from hand_codesign_msgs.msg import TrialRequest
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
@@ -34,7 +34,7 @@ PARAMETERS = {
     'run_id': ('', 'serve only this run; empty: every run it hears of', None),
     'heartbeat_period': (0.5, 'seconds between status messages', (0.01, 60.0)),
     'start_timeout': (30.0, 'seconds for the rig to start a requested trial', (0.1, 3600.0)),
-    'end_margin': (30.0, 'seconds beyond a trial\'s duration for the rig to end it',
+    'end_margin': (30.0, "seconds beyond a trial's duration for the rig to end it",
                    (0.1, 3600.0)),
     'max_gap': (0.1, 'seconds between two poses around a check: more is lost tracking',
                 (1e-4, 10.0)),
@@ -101,7 +101,7 @@ class RigEvaluatorNode(Node):
                 continue
             if kind == 'evaluated':
                 answer = evaluation_message(candidate, self.evaluator_id, action[2])
-                answer.wall_time = float(action[3])
+                answer.wall_time, answer.measured = float(action[3]), True
             else:
                 self.get_logger().warning(f'candidate {candidate.candidate_id}: {action[2]}')
                 answer = rejection_message(candidate, self.evaluator_id, action[2])
@@ -116,18 +116,6 @@ class RigEvaluatorNode(Node):
             evaluator_id=self.evaluator_id, run_id=self.settings['run_id'],
             host=socket.gethostname(), pid=os.getpid(), capacity=1, load=self.rig.load(),
             evaluations_done=self.rig.done, stamp=stamp_now(self)))
-
-
-def trial_request(candidate, evaluator_id, trial_id, spec):
-    """Return the TrialRequest of one trial (a core.rig.TrialSpec) of a candidate."""
-    return TrialRequest(
-        run_id=candidate.run_id, candidate_id=candidate.candidate_id,
-        attempt=candidate.attempt, evaluator_id=evaluator_id, trial_id=int(trial_id),
-        world=spec.world, worlds=spec.worlds, object_shape=spec.shape,
-        object_size=list(spec.size), object_scale=float(spec.scale),
-        object_position=list(spec.position), object_orientation=list(spec.orientation),
-        object_mass=float(spec.mass), object_friction=float(spec.friction),
-        duration=float(spec.duration))
 
 
 def main(args=None):

@@ -12,12 +12,12 @@ import collections
 import sys
 import time
 
+from geometry_msgs.msg import PoseStamped
 from hand_codesign.core import contract
 from hand_codesign.core.sim_rig import requested_trial, SampleClock, SimulatedRig
 from hand_codesign.ros import topics
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import TrialStatus
-from geometry_msgs.msg import PoseStamped
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
@@ -30,9 +30,9 @@ PARAMETERS = {
     'phase': (0.0, 'offset of the sample clock, in sample periods', (0.0, 1.0)),
     'position_noise': (0.0, 'standard deviation of the position noise, m', (0.0, 1.0)),
     'angle_noise': (0.0, 'standard deviation of the orientation noise, rad', (0.0, 3.2)),
-    'latency': (0.0, 'seconds between a trial\'s start and its first poses', (0.0, 60.0)),
+    'latency': (0.0, "seconds between a trial's start and its first poses", (0.0, 60.0)),
     'seed': (0, 'seed of the noise', (0, 2 ** 31 - 1)),
-    'frame_id': ('world', 'frame of the poses: the task\'s world frame', None),
+    'frame_id': ('world', "frame of the poses: the task's world frame", None),
 }
 KEPT_CANDIDATES = 4096
 

@@ -10,6 +10,7 @@ subscriber that matches late (a recorder, an evaluator started by hand) still re
 was published before it matched.
 """
 
+from geometry_msgs.msg import PoseStamped
 from hand_codesign.core.contract import CANDIDATES
 from hand_codesign.core.contract import EVALUATIONS
 from hand_codesign.core.contract import EVALUATOR_STATUS
@@ -22,7 +23,6 @@ from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import EvaluatorStatus
 from hand_codesign_msgs.msg import GenerationSummary
-from geometry_msgs.msg import PoseStamped
 from hand_codesign_msgs.msg import RunInfo
 from hand_codesign_msgs.msg import TrialRequest
 from hand_codesign_msgs.msg import TrialStatus
