@@ -147,6 +147,12 @@ class RunController:
         self.batch = self.search.ask()
         self.genome_names = genome_spec(self.search.batch_task).names
         self.physical = {}
+        # a resumed run's first batch may be partly evaluated already (in its record)
+        known = self.resumed.known if self.resumed is not None else {}
+        self.results = {candidate.candidate_id: known[candidate.candidate_id]
+                        for candidate in self.batch if candidate.candidate_id in known}
+        self.dispatcher.add([candidate for candidate in self.batch
+                             if candidate.candidate_id not in self.results])
 
     def _physical(self, candidate):
         """Return a candidate's design in SI units, made once per batch (re-sends reuse it)."""
@@ -155,12 +161,6 @@ class RunController:
             design = self.physical[candidate.candidate_id] = candidate_design(
                 self.search.batch_task, candidate.x)
         return design
-        # a resumed run's first batch may be partly evaluated already (in its record)
-        known = self.resumed.known if self.resumed is not None else {}
-        self.results = {candidate.candidate_id: known[candidate.candidate_id]
-                        for candidate in self.batch if candidate.candidate_id in known}
-        self.dispatcher.add([candidate for candidate in self.batch
-                             if candidate.candidate_id not in self.results])
 
     def _tell_batch(self):
         checking = self.search.checking
