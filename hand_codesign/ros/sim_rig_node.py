@@ -47,6 +47,7 @@ class SimRigNode(Node):
                                 (self.settings['position_noise'],
                                  self.settings['angle_noise']), self.settings['seed'])
         self.runs = {}
+        self.last_stamp = 0  # ns, the end of the last trial
         self.candidates = collections.OrderedDict()
         self.status, self.poses = (self.create_publisher(
             topics.MESSAGE_TYPES[name], name, topics.QOS[name])
@@ -90,11 +91,15 @@ class SimRigNode(Node):
         for pose in poses:
             self.poses.publish(pose)
         end = poses[-1].header.stamp if poses else start
+        self.last_stamp = Time.from_msg(end).nanoseconds
         self.report(request, contract.TRIAL_ENDED, end,
                     'the simulation became unstable' if outcome == 'unstable' else '')
 
     def now(self):
-        return self.get_clock().now().to_msg()
+        # simulated trials run faster than real time and are stamped in simulated time: the
+        # rig's clock never goes back, so the stamps of two trials never overlap
+        now = max(self.get_clock().now().nanoseconds, self.last_stamp + 1_000_000)
+        return Time(nanoseconds=now).to_msg()
 
     def pose(self, start, seconds, position, orientation):
         message = PoseStamped()
