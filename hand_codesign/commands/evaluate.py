@@ -10,7 +10,6 @@ printing the gap between prediction and measurement, as `hand-codesign analyze` 
 """
 
 import pathlib
-import sys
 import tempfile
 
 from hand_codesign.analysis.records import open_run
@@ -72,4 +71,3 @@ def evaluate_command(arguments):
     table = rig_comparison(open_run(out))
     print(table.text() if table is not None else 'no design has both answers', flush=True)
     return 0 if table is not None else 1
-

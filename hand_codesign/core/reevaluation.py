@@ -79,6 +79,7 @@ class AnswerBook:
 
     def describe(self):
         """Return a line naming what is still missing."""
-        lacking = [f'{candidate_id} ({" and ".join("measured" if m else "simulated" for m in sorted(kinds))})'
+        lacking = [f'{candidate_id} (' + ' and '.join('measured' if kind else 'simulated'
+                                                      for kind in sorted(kinds)) + ')'
                    for candidate_id, kinds in sorted(self.missing.items()) if kinds]
         return 'still missing: ' + ', '.join(lacking) if lacking else 'complete'
