@@ -168,3 +168,25 @@ def test_lost_tracking_and_failures_are_rejections_and_a_collision_is_penalized(
     kind, evaluation, _ = trials.poll(0.1)
     assert kind == 'evaluated' and evaluation.collision
     assert np.all(evaluation.objectives == COLLISION_PENALTY)
+
+
+def test_rig_noise_is_seeded_and_moves_the_measured_poses():
+    task = load_task(TASKS / 'task5.yaml').replace(num_world_states=1)
+    x = genomes(task, 1, 1)[0]
+    design = rebuilt(task, x)
+    spec = RigTrials(task, design).poll(0.0)[2]
+
+    def trace(noise, seed):
+        rig = SimulatedRig(SampleClock(rate=100.0), noise, seed)
+        poses = []
+        try:
+            assert rig.run(task, design, spec, lambda t, p, q: poses.append((t, *p, *q))) == 'ok'
+        finally:
+            rig.close()
+        return np.array(poses)
+
+    exact, noisy = trace((0.0, 0.0), 0), trace((0.001, 0.01), 3)
+    assert exact.shape == noisy.shape and exact.shape[0] == 151   # 100 Hz over 1.5 s
+    np.testing.assert_array_equal(noisy, trace((0.001, 0.01), 3))
+    assert 0.0003 < np.std(noisy[:, 1:4] - exact[:, 1:4]) < 0.003
+    np.testing.assert_allclose(np.linalg.norm(noisy[:, 4:], axis=1), 1.0)
