@@ -95,9 +95,9 @@ def test_every_step_measured_gives_the_simulated_objectives_exactly():
 
 def test_sampled_at_100_hz_within_the_derived_tolerance():
     task = load_task(TASKS / 'task1.yaml').replace(num_world_states=2)
-    x = genomes(task, 1, 1)[0]
-    simulated = evaluate(x, task)
-    assert not simulated.collision
+    # the first of a few designs that does not start in collision
+    x, simulated = next((x, result) for x in genomes(task, 6, 1)
+                        for result in [evaluate(x, task)] if not result.collision)
     # samples halfway between the physics steps of the checks: every check is interpolated
     action, trials = rig_evaluation(task, x, SampleClock(rate=100.0, phase=0.5))
     assert action[0] == 'evaluated'
