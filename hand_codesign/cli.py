@@ -25,6 +25,8 @@ VERBS = {
                    'evaluate the best design of a bag on many world states'),
     'export': ('hand_codesign.analysis.export', 'export_command',
                'write the best design of a bag as URDF and its controller as YAML'),
+    'evaluate': ('hand_codesign.commands.evaluate', 'evaluate_command',
+                 "test a bag's best designs on a rig, beside their simulated prediction"),
 }
 
 
@@ -48,6 +50,17 @@ def add_run_arguments(parser):
     parser.add_argument('--live-host', default='127.0.0.1', metavar='HOST',
                         help='address the live view serves on (default 127.0.0.1: this host '
                              'only)')
+    add_rig_arguments(parser)
+
+
+def add_rig_arguments(parser):
+    parser.add_argument('--rig', choices=('hardware', 'sim'), default='',
+                        help='also start a rig evaluator: "hardware" for a test rig that joins '
+                             'the ROS domain, "sim" with a simulated rig (README: rigs)')
+    parser.add_argument('--rig-rate', type=float, default=0.0,
+                        help='--rig sim: poses per second (default 0: every physics step)')
+    parser.add_argument('--rig-phase', type=float, default=0.0,
+                        help='--rig sim: offset of the pose clock, in sample periods')
 
 
 def add_check_arguments(parser):
@@ -81,6 +94,15 @@ def add_bag_arguments(verb, parser):
         parser.add_argument('--workers', type=int, help='processes (default: all cores)')
     elif verb == 'export':
         parser.add_argument('--out', required=True, help='folder for the URDF and YAML')
+    elif verb == 'evaluate':
+        parser.add_argument('--top', type=int, default=3,
+                            help='how many of the best designs (default 3)')
+        parser.add_argument('--out', help='bag of the re-evaluation (default: <bag>_rig)')
+        parser.add_argument('--timeout', type=float, default=3600.0,
+                            help='seconds to wait for every answer (default 3600)')
+        parser.add_argument('--domain-id', type=int,
+                            help='ROS_DOMAIN_ID (default: a free one of this host)')
+        add_rig_arguments(parser)
 
 
 def build_parser():

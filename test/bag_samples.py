@@ -7,6 +7,7 @@ import sys
 import threading
 import time
 
+from geometry_msgs.msg import PoseStamped
 from hand_codesign.analysis import cdr
 from hand_codesign.ros import topics
 from hand_codesign.ros.mcap_writer import BagWriter
@@ -16,6 +17,8 @@ from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import EvaluatorStatus
 from hand_codesign_msgs.msg import GenerationSummary
 from hand_codesign_msgs.msg import RunInfo
+from hand_codesign_msgs.msg import TrialRequest
+from hand_codesign_msgs.msg import TrialStatus
 import numpy as np
 from rclpy.serialization import serialize_message
 
@@ -43,7 +46,10 @@ def sample_messages(run_id='run-1', generations=3, population=12, worlds=3, seed
             candidates.append(Candidate(
                 run_id=run_id, generation=generation, candidate_id=candidate_id,
                 evaluator_id='', attempt=0, structure=[2, 2], genome=genome.tolist(),
-                genome_names=genome_names))
+                genome_names=genome_names, design_names=['hand.friction'],
+                design_values=[0.5 + index], hand_urdf='<robot name="hand"/>',
+                controller_kind='torque', controller_mode='constant',
+                controller_knot_times=[0.0, 0.5], controller_values=[0.1] * 8))
             if candidate_id == 5:
                 evaluations.append(Evaluation(
                     run_id=run_id, generation=generation, candidate_id=candidate_id,
@@ -58,7 +64,7 @@ def sample_messages(run_id='run-1', generations=3, population=12, worlds=3, seed
                 objectives=objectives.tolist(), objective_names=OBJECTIVES,
                 fitness=float(objectives @ [1.0, 0.1]), collision=bool(index == 3),
                 unstable_worlds=index % 3, simulated_time=2.5 * worlds, wall_time=0.2,
-                world_objectives=world.ravel().tolist()))
+                world_objectives=world.ravel().tolist(), measured=index == 4))
         summaries.append(GenerationSummary(
             run_id=run_id, generation=generation, structure=[2, 2],
             objective_names=OBJECTIVES, best=[0.1, 0.2], median=[0.3, 0.4], worst=[0.5, 0.6],
@@ -74,7 +80,29 @@ def sample_messages(run_id='run-1', generations=3, population=12, worlds=3, seed
                 for index in range(7)]
     return {topics.RUN_INFO: [run_info], topics.CANDIDATES: candidates,
             topics.EVALUATIONS: evaluations, topics.EVALUATOR_STATUS: statuses,
-            topics.GENERATION_SUMMARY: summaries}
+            topics.GENERATION_SUMMARY: summaries, **rig_messages(run_id)}
+
+
+def rig_messages(run_id):
+    """Return {topic: [message, ...]} of one trial on a rig: request, events, two poses."""
+    request = TrialRequest(
+        run_id=run_id, candidate_id=4, attempt=0, evaluator_id='rig', trial_id=1, world=0,
+        worlds=1, object_shape='box', object_size=[0.1, 0.1, 0.1], object_scale=1.0,
+        object_position=[0.0, 0.0, 0.05], object_orientation=[0.0, 0.0, 0.0, 1.0],
+        object_mass=0.2, object_friction=0.8, duration=1.5)
+    events = [TrialStatus(rig_id='sim_rig', trial_id=1, evaluator_id='rig', event=event)
+              for event in (TrialStatus.EVENT_STARTED, TrialStatus.EVENT_ENDED)]
+    events[1].stamp.sec = 2
+    poses = []
+    for second in (0, 2):
+        pose = PoseStamped()
+        pose.header.stamp.sec = second
+        pose.header.frame_id = 'world'
+        pose.pose.position.z = 0.05 + second
+        pose.pose.orientation.w = 1.0
+        poses.append(pose)
+    return {topics.TRIAL_REQUESTS: [request], topics.TRIAL_STATUS: events,
+            topics.OBJECT_POSE: poses}
 
 
 def interleaved(messages_by_topic):

@@ -40,7 +40,8 @@ class Outbox:
         self.lines = []        # (level, text)
         self.result = None
 
-    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states):
+    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states,
+                       design):
         self.candidates.append((candidate, evaluator_id, attempt, genome_names, world_states))
 
     def send_summary(self, summary):

@@ -3,8 +3,11 @@
 import pathlib
 
 from hand_codesign.core.evaluate import evaluate
+from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.optimizers import Candidate as CoreCandidate
 from hand_codesign.core.optimizers import OptimizerResult
+from hand_codesign.core.physical import candidate_design
+from hand_codesign.core.physical import design_from_physical
 from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.summary import generation_summary
 from hand_codesign.ros.conversions import candidate_message
@@ -28,6 +31,22 @@ def through_the_wire(message):
 def core_candidate():
     return CoreCandidate(candidate_id=12, generation=2, x=np.linspace(0.0, 1.0, 24),
                          structure=(2, 2))
+
+
+def test_a_candidate_message_carries_the_design_that_rebuilds_it():
+    task = load_run_task(TASK)
+    candidate = core_candidate()
+    physical = candidate_design(task, candidate.x)
+    message = through_the_wire(candidate_message(
+        'run-1', candidate, (2, 2), [f'g{i}' for i in range(24)], '', 0, 0, physical))
+    assert message.hand_urdf == physical.urdf
+    assert (message.controller_kind, message.controller_mode) == ('torque', 'constant')
+    assert list(message.controller_knot_times) == list(physical.knot_times)
+    rebuilt = design_from_physical(message.structure, message.design_names,
+                                   message.design_values, message.controller_kind,
+                                   message.controller_values, message.controller_kp,
+                                   message.controller_kd)
+    assert rebuilt == genome_spec(task).decode(candidate.x)
 
 
 def test_a_candidate_message_carries_genome_structure_and_worlds():

@@ -33,6 +33,8 @@ def assert_same_message(decoded, original):
         actual = getattr(decoded, name)
         if name == 'stamp':
             assert (actual.sec, actual.nanosec) == (expected.sec, expected.nanosec)
+        elif hasattr(expected, 'get_fields_and_field_types'):   # a nested message
+            assert_same_message(actual, expected)
         elif isinstance(expected, (str, bool, int, float)):
             assert actual == expected, name
         else:

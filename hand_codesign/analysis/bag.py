@@ -168,8 +168,9 @@ class _Channel:
 class _Scan:
     """The raw content of an MCAP file: channels and the messages of the channels we want."""
 
-    def __init__(self, path):
+    def __init__(self, path, wanted=LOOP_TYPES):
         self.path = path
+        self.wanted = wanted   # the types whose messages are kept
         self.profile = None
         self.schemas = {}
         self.channels = {}
@@ -222,15 +223,17 @@ def _check_start(path):
             f'{MCAP_MAGIC!r}); expected a bag written by the hand_codesign recorder')
 
 
-def scan_file(path):
+def scan_file(path, wanted=LOOP_TYPES):
     """
     Return the _Scan of one MCAP file, read front to back by mcap's StreamReader.
+
+    The messages of the types in `wanted` are kept, the others only counted.
 
     Reading stops cleanly where the file is cut off (``truncated``); a chunk that cannot be
     decompressed or broken up is reported in ``damage`` and skipped.
     """
     _check_start(path)
-    scan = _Scan(path)
+    scan = _Scan(path, wanted)
     scan.truncated = True
     with open(path, 'rb') as stream:
         try:
@@ -278,7 +281,7 @@ def _read_record(scan, record):
         name, encoding, text = scan.schemas.get(record.schema_id, ('', '', ''))
         scan.channels[record.id] = _Channel(record.topic, name, encoding, text,
                                             record.message_encoding)
-        if name in LOOP_TYPES:
+        if name in scan.wanted:
             scan.messages[record.id]   # creates the list: messages of this channel are kept
     elif kind is Header:
         scan.profile = record.profile
@@ -476,6 +479,26 @@ def _choose_run(run_id, tables, warnings):
                         'messages')
         return chosen, all_runs
     return '', all_runs
+
+
+def read_topics(path, type_names):
+    """
+    Return ({type name: Table}, warnings) of every message of those types in the bag at path.
+
+    For the topics beside the loop's (the rig's trials); nested fields (a PoseStamped's
+    header and pose) come as nested tuples, times as integer nanoseconds.
+    """
+    warnings = []
+    parts = collections.defaultdict(list)
+    for file in _bag_files(pathlib.Path(path)):
+        scan = scan_file(file, tuple(type_names))
+        warnings.extend(f'{scan.path}: {problem}' for problem in scan.damage)
+        for channel_id, channel in scan.channels.items():
+            if channel.schema_name in type_names:
+                rows = scan.messages.get(channel_id, [])
+                parts[channel.schema_name].append(
+                    _table(*_decode_channel(channel, rows, warnings)))
+    return {name: _concatenate(parts[name]) for name in type_names}, warnings
 
 
 def read_run(path, run_id=None):

@@ -23,6 +23,7 @@ It prints a summary table to the terminal.
 import pathlib
 
 from hand_codesign.analysis import records
+from hand_codesign.analysis.rig_report import rig_comparison
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.errors import UserError
 import numpy as np
@@ -218,6 +219,7 @@ class Report:
         self.fronts = (pareto_fronts(record, len(self.names), self.generations.rows)
                        if self.names else [])
         self.best = self._best_design()
+        self.rig = rig_comparison(record)   # prediction against measurement, if any
 
     # ---------------------------------------------------------------- facts
 
@@ -328,6 +330,10 @@ class Report:
             files.append(out / 'pareto_front.csv')
             self.write_front_csv(files[-1])
         files += figures
+        if self.rig is not None:
+            files.append(out / 'rig_gap.csv')
+            self.rig.write_csv(files[-1])
+            files.append(self.rig.plot(out / 'rig_gap.png', _pyplot()))
         files.append(out / 'report.md')
         files[-1].write_text(self.markdown([figure.name for figure in figures]),
                              encoding='utf-8')
@@ -371,6 +377,8 @@ class Report:
         for name in figure_names:
             lines += [f'![{name}]({name})', '']
         lines += self.best_markdown()
+        if self.rig is not None:
+            lines += self.rig.markdown('rig_gap.png')
         lines += ['', '## Files', '',
                   '- `evaluations.csv`: every evaluation (normalized genome by gene name)',
                   '- `generations.csv`: best and median of each objective per generation']
@@ -423,6 +431,8 @@ class Report:
                           f'{design.generation}{horizon}), {fitness} ({objectives})']
             for name, value, unit, *_ in self.best_parameters():
                 lines.append(f'  {name:<40} {value:>12.6g} {unit}')
+        if self.rig is not None:
+            lines += ['', self.rig.text()]
         return '\n'.join(lines)
 
     def generation_table(self):

@@ -40,8 +40,9 @@ def run_command(arguments):
             f'ROS_DOMAIN_ID={domain_id}, bag {bag}')
         try:
             with termination_as_interrupt():
+                system.rig_parameters = rig_parameters(arguments)
                 code = system.run(arguments.evaluators, OPTIMIZER_MODULE,
-                                  optimizer_parameters(arguments, task, bag))
+                                  optimizer_parameters(arguments, task, bag), arguments.rig)
         except KeyboardInterrupt:
             say('interrupted: stopping the evaluators and closing the bag')
             system.stop_all()
@@ -60,7 +61,8 @@ def run_command(arguments):
 def optimizer_parameters(arguments, task, bag):
     """Return the optimizer node's parameters for this run."""
     parameters = {
-        'evaluators_expected': max(1, arguments.evaluators), 'subscribers_expected': 1,
+        'evaluators_expected': max(1, arguments.evaluators + bool(arguments.rig)),
+        'subscribers_expected': 1,
         'result_file': bag / 'result.json'}
     if arguments.resume:
         parameters['resume_bag'] = pathlib.Path(arguments.resume).resolve()
@@ -70,6 +72,14 @@ def optimizer_parameters(arguments, task, bag):
             'iterations': task.iterations, 'population': task.population,
             'world_states': task.num_world_states})
     return parameters
+
+
+def rig_parameters(arguments):
+    """Return the simulated rig's parameters from the --rig-* flags."""
+    if arguments.rig_rate < 0 or not 0 <= arguments.rig_phase <= 1:
+        raise UserError(f'--rig-rate {arguments.rig_rate} / --rig-phase {arguments.rig_phase}: '
+                        'expected a rate >= 0 (0: every physics step) and a phase in [0, 1]')
+    return {'rate': float(arguments.rig_rate), 'phase': float(arguments.rig_phase)}
 
 
 @contextlib.contextmanager

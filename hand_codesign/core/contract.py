@@ -16,6 +16,11 @@ CANDIDATES = 'candidates'
 EVALUATIONS = 'evaluations'
 EVALUATOR_STATUS = 'evaluator_status'
 GENERATION_SUMMARY = 'generation_summary'
+# Hardware in the loop (hand_codesign.core.rig): a rig evaluator's trial requests, the rig's
+# trial events and the object's measured pose.
+TRIAL_REQUESTS = 'rig/trial_requests'
+TRIAL_STATUS = 'rig/trial_status'
+OBJECT_POSE = 'rig/object_pose'
 
 
 def type_name(message):
@@ -28,16 +33,27 @@ CANDIDATE_TYPE = type_name('Candidate')
 EVALUATION_TYPE = type_name('Evaluation')
 EVALUATOR_STATUS_TYPE = type_name('EvaluatorStatus')
 GENERATION_SUMMARY_TYPE = type_name('GenerationSummary')
+TRIAL_REQUEST_TYPE = type_name('TrialRequest')
+TRIAL_STATUS_TYPE = type_name('TrialStatus')
+POSE_STAMPED_TYPE = 'geometry_msgs/msg/PoseStamped'
 
-# topic -> ROS type name, in the order the recorder subscribes
-TOPIC_TYPES = {
+# topic -> ROS type name of the loop itself
+LOOP_TOPIC_TYPES = {
     RUN_INFO: RUN_INFO_TYPE,
     CANDIDATES: CANDIDATE_TYPE,
     EVALUATIONS: EVALUATION_TYPE,
     EVALUATOR_STATUS: EVALUATOR_STATUS_TYPE,
     GENERATION_SUMMARY: GENERATION_SUMMARY_TYPE,
 }
-LOOP_TYPES = tuple(TOPIC_TYPES.values())
+LOOP_TYPES = tuple(LOOP_TOPIC_TYPES.values())
+# the trials of rig evaluators: recorded, so the bag holds each measured pose trace
+RIG_TOPIC_TYPES = {
+    TRIAL_REQUESTS: TRIAL_REQUEST_TYPE,
+    TRIAL_STATUS: TRIAL_STATUS_TYPE,
+    OBJECT_POSE: POSE_STAMPED_TYPE,
+}
+# every topic, in the order the recorder subscribes
+TOPIC_TYPES = {**LOOP_TOPIC_TYPES, **RIG_TOPIC_TYPES}
 
 # What a 3D viewer (Foxglove, Lichtblick, RViz) draws: standard messages beside the loop's,
 # recorded in the bag too. With each generation summary the optimizer publishes the best
@@ -60,6 +76,12 @@ REPLAY_TOPIC_TYPES = {REPLAY_MARKERS: MARKER_ARRAY_TYPE, REPLAY_GOAL: POSE_STAMP
 STATUS_OK = 0
 STATUS_REJECTED = 1
 STATUS_NAMES = {STATUS_OK: 'ok', STATUS_REJECTED: 'rejected'}
+
+# TrialStatus.event (the constants of TrialStatus.msg)
+TRIAL_STARTED = 0
+TRIAL_ENDED = 1
+TRIAL_START_COLLISION = 2
+TRIAL_FAILED = 3
 
 # The recorder logs a line starting with this once its subscriptions exist; a runner waits
 # for it before starting the optimizer.

@@ -5,7 +5,8 @@ A RunController owns the run's Search, a Dispatcher, the results of the batch in
 the summaries. It is driven by what the optimizer hears (`heard_from` a heartbeat,
 `evaluated`, `rejected`) and by `tick()`, and answers through an outbox with four methods:
 
-    send_candidate(candidate, evaluator_id, attempt, genome_names, world_states)
+    send_candidate(candidate, evaluator_id, attempt, genome_names, world_states, design)
+                                   # design: its core.physical.PhysicalDesign (SI units)
     send_summary(summary)          # a core.summary mapping; the last one has final=True;
                                    # its 'best_design' holds the best design so far as
                                    # core.geometry Shapes, for a 3D viewer
@@ -33,6 +34,7 @@ import time
 from hand_codesign.core.dispatch import Dispatcher
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.geometry import design_shapes
+from hand_codesign.core.physical import candidate_design
 from hand_codesign.core.runs import library_versions
 from hand_codesign.core.search import Search
 from hand_codesign.core.summary import generation_summary
@@ -69,6 +71,7 @@ class RunController:
         self.wall_times = collections.deque(maxlen=ADAPTIVE_WINDOW)
         self.batch = None
         self.genome_names = ()
+        self.physical = {}  # candidate id -> PhysicalDesign of the batch in flight
         self.results = {}
         self.last_summary = None
         self.started = None
@@ -138,7 +141,7 @@ class RunController:
             world_states = self.search.batch_task.num_world_states if self.search.checking else 0
             for candidate, evaluator_id, attempt in self.dispatcher.assignments(self.clock()):
                 self.outbox.send_candidate(candidate, evaluator_id, attempt, self.genome_names,
-                                           world_states)
+                                           world_states, self._physical(candidate))
             if self.dispatcher.unfinished:
                 return
             self._tell_batch()
@@ -146,12 +149,21 @@ class RunController:
     def _start_batch(self):
         self.batch = self.search.ask()
         self.genome_names = genome_spec(self.search.batch_task).names
+        self.physical = {}
         # a resumed run's first batch may be partly evaluated already (in its record)
         known = self.resumed.known if self.resumed is not None else {}
         self.results = {candidate.candidate_id: known[candidate.candidate_id]
                         for candidate in self.batch if candidate.candidate_id in known}
         self.dispatcher.add([candidate for candidate in self.batch
                              if candidate.candidate_id not in self.results])
+
+    def _physical(self, candidate):
+        """Return a candidate's design in SI units, made once per batch (re-sends reuse it)."""
+        design = self.physical.get(candidate.candidate_id)
+        if design is None:
+            design = self.physical[candidate.candidate_id] = candidate_design(
+                self.search.batch_task, candidate.x)
+        return design
 
     def _tell_batch(self):
         checking = self.search.checking

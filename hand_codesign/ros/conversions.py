@@ -5,6 +5,7 @@ from hand_codesign.core.contract import WORLD_FRAME
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import GenerationSummary
+from hand_codesign_msgs.msg import TrialRequest
 import numpy as np
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker
@@ -26,19 +27,32 @@ def float_list(values):
 
 
 def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, attempt,
-                      world_states=0):
+                      world_states=0, design=None):
     """
     Return the Candidate message sending an optimizer's candidate to an evaluator.
 
     world_states: 0 evaluates it on the run's worlds; more for a hierarchy structure's check.
+    design: its core.physical.PhysicalDesign, for evaluators that do not decode genomes.
     """
-    return Candidate(
+    message = Candidate(
         run_id=run_id, generation=int(candidate.generation),
         candidate_id=int(candidate.candidate_id),
         evaluator_id=evaluator_id, attempt=int(attempt),
         structure=[int(joints) for joints in structure], genome=float_list(candidate.x),
         horizon=float(getattr(candidate, 'horizon', 0.0)),
         genome_names=list(genome_names), world_states=int(world_states))
+    if design is not None:
+        message.design_names = list(design.names)
+        message.design_values = list(design.values)
+        message.hand_urdf = design.urdf
+        message.controller_kind = design.controller_kind
+        message.controller_mode = design.controller_mode
+        message.gravity_compensation = design.gravity_compensation
+        message.controller_knot_times = list(design.knot_times)
+        message.controller_values = list(design.controller_values)
+        message.controller_kp = list(design.kp)
+        message.controller_kd = list(design.kd)
+    return message
 
 
 def evaluation_message(candidate, evaluator_id, evaluation):
@@ -113,3 +127,15 @@ def markers_message(shapes, stamp, frame_id=WORLD_FRAME):
         number = counts[shape.group] = counts.get(shape.group, -1) + 1
         markers.append(shape_marker(shape, number, stamp, frame_id))
     return MarkerArray(markers=markers)
+
+
+def trial_request(candidate, evaluator_id, trial_id, spec):
+    """Return the TrialRequest of one trial (a core.rig.TrialSpec) of a candidate."""
+    return TrialRequest(
+        run_id=candidate.run_id, candidate_id=candidate.candidate_id,
+        attempt=candidate.attempt, evaluator_id=evaluator_id, trial_id=int(trial_id),
+        world=spec.world, worlds=spec.worlds, object_shape=spec.shape,
+        object_size=list(spec.size), object_scale=float(spec.scale),
+        object_position=list(spec.position), object_orientation=list(spec.orientation),
+        object_mass=float(spec.mass), object_friction=float(spec.friction),
+        duration=float(spec.duration))

@@ -2,8 +2,7 @@
 The optimizer node: the run's RunController (hand_codesign.core.controller) over ROS 2.
 
 It announces the run (RunInfo, latched), turns heartbeats and evaluations into calls of the
-controller and its candidates, summaries and best designs (markers) into messages. Resuming
-reads the bag with `main`'s `load_resume` (from hand_codesign.commands.optimizer).
+controller, and its candidates, summaries and best designs (markers) into messages.
 """
 
 import sys
@@ -52,7 +51,7 @@ PARAMETERS = {
 
 
 class OptimizerNode(Node):
-    """Carry the run's RunController over ROS 2 (it is the controller's outbox)."""
+    """Carry the run's RunController over ROS 2; resuming reads the bag with `load_resume`."""
 
     def __init__(self, load_resume=None):
         super().__init__('optimizer')
@@ -108,10 +107,11 @@ class OptimizerNode(Node):
         else:
             self.run.evaluated(*key, message.objectives, message.wall_time)
 
-    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states):
+    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states,
+                       design):
         self.publish(topics.CANDIDATES, candidate_message(
             self.run.run_id, candidate, candidate.structure, genome_names, evaluator_id,
-            attempt, world_states))
+            attempt, world_states, design))
 
     def send_summary(self, summary):
         self.publish(topics.GENERATION_SUMMARY, summary_message(self.run.run_id, summary))

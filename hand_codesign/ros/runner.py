@@ -64,8 +64,9 @@ class System:
             AMENT_PREFIX_PATH=os.environ.get('AMENT_PREFIX_PATH', sys.prefix),
             RCUTILS_CONSOLE_OUTPUT_FORMAT='[{severity}] [{name}]: {message}')
         self.recorder = None
-        self.evaluators = []
+        self.evaluators = []   # and the rig's nodes
         self.optimizer = None
+        self.rig_parameters = {}
 
     def say(self, text):
         if not self.quiet:
@@ -80,19 +81,30 @@ class System:
         return subprocess.Popen(command, env=self.environment, start_new_session=True,
                                 **popen)
 
-    def run(self, evaluators, optimizer_module, optimizer_parameters):
-        """Run recorder, evaluators and optimizer until the optimizer ends; return its code."""
+    def run(self, evaluators, optimizer_module, optimizer_parameters, rig=''):
+        """
+        Run recorder, evaluators and optimizer until the optimizer ends; return its code.
+
+        rig: 'hardware' adds a rig evaluator (a rig joins the domain), 'sim' also a simulated
+        rig (hand_codesign.ros.sim_rig_node); rig_parameters go to the simulated rig.
+        """
         self.start_recorder()
         if self.live is not None:
             self.start_live_view()
         logs = self.bag / 'logs'
         logs.mkdir()
-        for index in range(evaluators):
-            log = open(logs / f'evaluator-{index}.log', 'w')
-            self.evaluators.append(self.node(
-                'hand_codesign.ros.evaluator_node', {'evaluator_id': f'evaluator-{index}',
-                                                     'subscribers_expected': 2},
-                stdout=log, stderr=subprocess.STDOUT))
+        nodes = [(f'evaluator-{index}', 'hand_codesign.ros.evaluator_node',
+                  {'evaluator_id': f'evaluator-{index}', 'subscribers_expected': 2})
+                 for index in range(evaluators)]
+        if rig:
+            nodes.append(('rig_evaluator', 'hand_codesign.ros.rig_evaluator_node',
+                          {'evaluator_id': 'rig_evaluator', 'subscribers_expected': 2}))
+        if rig == 'sim':
+            nodes.append(('sim_rig', 'hand_codesign.ros.sim_rig_node', self.rig_parameters))
+        for name, module, parameters in nodes:
+            log = open(logs / f'{name}.log', 'w')
+            self.evaluators.append(self.node(module, parameters, stdout=log,
+                                             stderr=subprocess.STDOUT))
         self.optimizer = self.node(optimizer_module, optimizer_parameters,
                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         relay = threading.Thread(target=self.relay_optimizer, daemon=True)

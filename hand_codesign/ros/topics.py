@@ -10,17 +10,23 @@ subscriber that matches late (a recorder, an evaluator started by hand) still re
 was published before it matched.
 """
 
+from geometry_msgs.msg import PoseStamped
 from hand_codesign.core.contract import BEST_DESIGN
 from hand_codesign.core.contract import CANDIDATES
 from hand_codesign.core.contract import EVALUATIONS
 from hand_codesign.core.contract import EVALUATOR_STATUS
 from hand_codesign.core.contract import GENERATION_SUMMARY
+from hand_codesign.core.contract import OBJECT_POSE
 from hand_codesign.core.contract import RUN_INFO
+from hand_codesign.core.contract import TRIAL_REQUESTS
+from hand_codesign.core.contract import TRIAL_STATUS
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import EvaluatorStatus
 from hand_codesign_msgs.msg import GenerationSummary
 from hand_codesign_msgs.msg import RunInfo
+from hand_codesign_msgs.msg import TrialRequest
+from hand_codesign_msgs.msg import TrialStatus
 from rclpy.qos import DurabilityPolicy
 from rclpy.qos import HistoryPolicy
 from rclpy.qos import QoSProfile
@@ -45,12 +51,24 @@ STATUS_QOS = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )
 
+# A rig's trials: every pose of a trace matters (the evaluator scores it) and none is worth
+# anything after its trial, so the history is deep and nothing is kept for late joiners.
+RIG_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=HISTORY_DEPTH,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+
 MESSAGE_TYPES = {
     RUN_INFO: RunInfo,
     CANDIDATES: Candidate,
     EVALUATIONS: Evaluation,
     EVALUATOR_STATUS: EvaluatorStatus,
     GENERATION_SUMMARY: GenerationSummary,
+    TRIAL_REQUESTS: TrialRequest,
+    TRIAL_STATUS: TrialStatus,
+    OBJECT_POSE: PoseStamped,
 }
 
 # What a 3D viewer draws (core.contract.VIEW_TOPIC_TYPES), and every topic a bag records.
@@ -67,6 +85,9 @@ QOS = {
     GENERATION_SUMMARY: LOOP_QOS,
     # one per summary, like the summaries: a late viewer or recorder gets them all
     BEST_DESIGN: LOOP_QOS,
+    TRIAL_REQUESTS: RIG_QOS,
+    TRIAL_STATUS: RIG_QOS,
+    OBJECT_POSE: RIG_QOS,
 }
 
 
