@@ -25,7 +25,10 @@ VERBS = {
                    'evaluate the best design of a bag on many world states'),
     'export': ('hand_codesign.analysis.export', 'export_command',
                'write the best design of a bag as URDF and its controller as YAML'),
+    'recover': ('hand_codesign.commands.recover', 'recover_command',
+                'close the bag of a recorder that was killed, so that any reader takes it'),
 }
+DEFAULT_PORT = 11811   # Fast DDS's own default for a discovery server
 
 
 def add_run_arguments(parser):
@@ -42,6 +45,15 @@ def add_run_arguments(parser):
     parser.add_argument('--domain-id', type=int,
                         help='ROS_DOMAIN_ID of the run (default: a free one of this host)')
     parser.add_argument('--quiet', action='store_true', help='print only the final summary')
+    parser.add_argument('--discovery-server', type=int, nargs='?', const=DEFAULT_PORT,
+                        metavar='PORT',
+                        help='start a Fast DDS discovery server (UDP port, default '
+                             f'{DEFAULT_PORT}) for evaluators on hosts without multicast; '
+                             'prints how they join')
+    parser.add_argument('--start-timeout', type=float,
+                        help='seconds the evaluators have to join before the run gives up '
+                             '(default 300 with --evaluators N > 0; 0: wait without limit, '
+                             'the default with --evaluators 0)')
 
 
 def add_check_arguments(parser):

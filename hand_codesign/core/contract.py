@@ -47,3 +47,7 @@ STATUS_NAMES = {STATUS_OK: 'ok', STATUS_REJECTED: 'rejected'}
 # The recorder logs a line starting with this once its subscriptions exist; a runner waits
 # for it before starting the optimizer.
 RECORDER_READY = 'recorder ready'
+
+# The optimizer logs this line once its evaluators are there and the run starts; the runner's
+# supervision waits for it (its start deadline).
+EVALUATORS_READY = 'evaluators ready, starting'

@@ -10,6 +10,8 @@ subscriber that matches late (a recorder, an evaluator started by hand) still re
 was published before it matched.
 """
 
+import time
+
 from hand_codesign.core.contract import CANDIDATES
 from hand_codesign.core.contract import EVALUATIONS
 from hand_codesign.core.contract import EVALUATOR_STATUS
@@ -20,6 +22,7 @@ from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import EvaluatorStatus
 from hand_codesign_msgs.msg import GenerationSummary
 from hand_codesign_msgs.msg import RunInfo
+from rclpy.duration import Duration
 from rclpy.qos import DurabilityPolicy
 from rclpy.qos import HistoryPolicy
 from rclpy.qos import QoSProfile
@@ -64,3 +67,26 @@ def type_name(message_class):
     """Return the ROS type name of a message class, e.g. 'hand_codesign_msgs/msg/Candidate'."""
     module = message_class.__module__.split('.')[0]
     return f'{module}/msg/{message_class.__name__}'
+
+
+# How long a publisher that is done waits for its expected subscribers (a recorder being
+# restarted by the runner) before it gives its messages up, and for their acknowledgements.
+RETURN_WAIT = 30.0
+ACK_WAIT = 5.0
+
+
+def deliver(publishers, subscribers_expected, timeout=RETURN_WAIT):
+    """
+    Return once every publisher's expected subscribers are there and acknowledged everything.
+
+    The history of a publisher ends with its process: a recorder restarted after it died
+    (ros.runner, ros.bag_files) gets the messages it missed only from publishers that still
+    exist, so a node that is done waits for it (at most timeout s) before it exits.
+    """
+    deadline = time.monotonic() + timeout
+    for publisher in publishers:
+        while (publisher.get_subscription_count() < subscribers_expected
+               and time.monotonic() < deadline):
+            time.sleep(0.05)
+    for publisher in publishers:
+        publisher.wait_for_all_acked(Duration(seconds=ACK_WAIT))
