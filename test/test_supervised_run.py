@@ -1,38 +1,57 @@
 """
-Runs whose processes die (`hand-codesign run` supervising them), compared with a clean run.
+Runs whose processes die or whose hosts lose their link, compared with a clean run.
 
-Each run is the small Task 5 run of test_system. What a user checks: the run finishes, prints
+Each run has the budget of the session's clean run (analysis_run.real_run, Task 5). What a user checks: the run finishes, prints
 what happened, and its generation summaries are those of the clean run; the bag of a run whose
 recorder was killed is closed, readable by rosbags, and holds every message of the run once.
+
+The test hosts are the project's own: two network namespaces joined by a veth pair with
+multicast off, created by the test as root and deleted afterwards (with whatever still runs
+in them); nothing leaves them. Where namespaces are not permitted the test is skipped and
+says why.
 """
 
+import collections
+import contextlib
 import json
+import os
+import shutil
 import signal
+import subprocess
+import sys
 import threading
 import time
 
+from analysis_run import BUDGET
+from analysis_run import TASK
 from hand_codesign.analysis.bag import read_run
 import psutil
 import pytest
 from rosbags.rosbag2 import Reader
-from test_system import finish
+from test_system import free_domain
+from test_system import ROOT
 from test_system import start_run
 from test_system import summaries
 import yaml
 
 
-@pytest.fixture(scope='module')
-def clean_run(tmp_path_factory):
-    bag = tmp_path_factory.mktemp('supervised') / 'clean'
-    finish(start_run(bag, 1))
-    return bag
+@pytest.fixture
+def clean_run(real_run):
+    """Return the bag of the session's clean run (analysis_run.real_run, same budget)."""
+    return real_run.bag
 
 
 class Watched:
     """A run started in the background whose output lines are collected as they come."""
 
-    def __init__(self, bag, evaluators):
-        self.process = start_run(bag, evaluators)
+    def __init__(self, bag, evaluators, extra=(), host=None):
+        if host is None:
+            self.process = start_run(bag, evaluators, budget=BUDGET, extra=extra)
+        else:   # `hand-codesign run` on a test host
+            self.process = subprocess.Popen(
+                host + [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
+                        '--evaluators', str(evaluators), '--bag', str(bag), *BUDGET, *extra],
+                cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         self.lines = []
         self.reader = threading.Thread(target=lambda: self.lines.extend(self.process.stdout),
                                        daemon=True)
@@ -61,7 +80,7 @@ class Watched:
         return None
 
     def finish(self):
-        self.process.wait(timeout=240)
+        self.process.wait(timeout=300)
         self.reader.join(timeout=10)
         assert self.process.returncode == 0, self.output()
         return self.output()
@@ -82,7 +101,7 @@ def test_evaluator_killed_during_start_up(clean_run, tmp_path):
 def test_recorder_killed_mid_run(clean_run, tmp_path):
     bag = tmp_path / 'recorder'
     run = Watched(bag, 2)
-    run.wait_for(lambda: 'generation 1/3' in run.output())
+    run.wait_for(lambda: 'generation 1/4' in run.output())
     run.child('recorder_node').send_signal(signal.SIGKILL)
     output = run.finish()
     assert 'recorder exited (code -9); restarting it' in output
@@ -104,10 +123,111 @@ def test_recorder_killed_mid_run(clean_run, tmp_path):
                        record.evaluations['evaluator_id']))
     assert len(answers) == len(set(answers))
     ok = record.evaluations.select(record.evaluations['status'] == 0)
-    assert sorted(set(ok['candidate_id'])) == list(range(18))
+    assert sorted(set(ok['candidate_id'])) == list(range(24))
     # each evaluator logs how many evaluations it published when it stops
     published_evaluations = sum(
         int(line.rsplit(' published ', 1)[1].split()[0])
         for log in (bag / 'logs').glob('evaluator-*.log')
         for line in log.read_text().splitlines() if ' published ' in line)
     assert record.message_counts['/evaluations'] == published_evaluations
+
+
+class Hosts:
+    """Two hosts of the test's own: network namespaces A and B, a veth pair, no multicast."""
+
+    def __init__(self):
+        tag = os.getpid() % 100000
+        self.a, self.b = f'hc{tag}a', f'hc{tag}b'
+        self.link_a, self.link_b = f'hc{tag}va', f'hc{tag}vb'
+        self.address_a = '10.213.0.1'
+
+    def create(self):
+        commands = [
+            ['netns', 'add', self.a], ['netns', 'add', self.b],
+            ['link', 'add', self.link_a, 'type', 'veth', 'peer', 'name', self.link_b],
+            ['link', 'set', self.link_a, 'netns', self.a],
+            ['link', 'set', self.link_b, 'netns', self.b],
+            ['-n', self.a, 'addr', 'add', f'{self.address_a}/24', 'dev', self.link_a],
+            ['-n', self.b, 'addr', 'add', '10.213.0.2/24', 'dev', self.link_b]]
+        for host, link in ((self.a, self.link_a), (self.b, self.link_b)):
+            commands += [['-n', host, 'link', 'set', link, 'multicast', 'off', 'up'],
+                         ['-n', host, 'link', 'set', 'lo', 'up']]
+        for command in commands:
+            done = subprocess.run(['ip', *command], capture_output=True, text=True)
+            if done.returncode != 0:
+                return f'`ip {" ".join(command)}` failed: {done.stderr.strip()}'
+        return None
+
+    def on(self, host):
+        """Return the command prefix that runs a command on host (a or b)."""
+        return ['ip', 'netns', 'exec', host]
+
+    def cut_b(self):
+        subprocess.run(['ip', '-n', self.b, 'link', 'set', self.link_b, 'down'], check=True)
+
+    def destroy(self):
+        """Kill what still runs on the hosts and delete them (the veth pair goes with them)."""
+        for host in (self.a, self.b):
+            pids = subprocess.run(['ip', 'netns', 'pids', host], capture_output=True,
+                                  text=True).stdout.split()
+            for pid in pids:
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(int(pid), signal.SIGKILL)
+            subprocess.run(['ip', 'netns', 'del', host], capture_output=True)
+
+
+@pytest.fixture
+def hosts():
+    if shutil.which('ip') is None:
+        pytest.skip('test hosts need the `ip` command (iproute2) for network namespaces')
+    if os.geteuid() != 0:
+        pytest.skip('test hosts need root to create network namespaces')
+    test_hosts = Hosts()
+    try:
+        problem = test_hosts.create()
+        if problem:
+            pytest.skip(f'network namespaces are not permitted here: {problem}')
+        yield test_hosts
+    finally:
+        test_hosts.destroy()
+
+
+def evaluator_on(hosts, host, evaluator_id, server, domain, log):
+    """Start an evaluator on a test host that finds the run through the discovery server."""
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_DISCOVERY_SERVER=server,
+               ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET')
+    return subprocess.Popen(
+        hosts.on(host) + [sys.executable, '-m', 'hand_codesign.ros.evaluator_node',
+                          '--ros-args', '-p', f'evaluator_id:={evaluator_id}',
+                          '-p', 'subscribers_expected:=2'],
+        env=env, stdout=log, stderr=subprocess.STDOUT)
+
+
+def test_host_b_joins_through_the_discovery_server_then_its_link_is_cut(
+        clean_run, hosts, tmp_path):
+    bag, domain, port = tmp_path / 'hosts', free_domain(), 11811
+    started = []
+    try:
+        with open(tmp_path / 'host-b.log', 'w') as log:
+            started.append(evaluator_on(hosts, hosts.b, 'host-b',
+                                        f'{hosts.address_a}:{port}', domain, log))
+        # host A: the run with no evaluator of its own; multicast is off on both hosts
+        run = Watched(bag, 0, host=hosts.on(hosts.a),
+                      extra=['--discovery-server', str(port), '--domain-id', str(domain)])
+        run.wait_for(lambda: 'generation 1/4' in run.output())
+        with open(tmp_path / 'host-a.log', 'w') as log:
+            started.append(evaluator_on(hosts, hosts.a, 'host-a', f'127.0.0.1:{port}',
+                                        domain, log))
+        hosts.cut_b()
+        output = run.finish()
+    finally:
+        for process in started:
+            process.kill()
+            process.wait()
+    assert f'ROS_DISCOVERY_SERVER={hosts.address_a}:{port}' in output
+    assert summaries(bag) == summaries(clean_run)
+    record = read_run(bag)
+    ok = record.evaluations.select(record.evaluations['status'] == 0)
+    by_host = collections.Counter(ok['evaluator_id'])
+    assert by_host['host-b'] >= 6 and by_host['host-a'] >= 1, by_host
+    assert max(record.candidates['attempt']) >= 1, 'nothing of host B had to be sent again'

@@ -96,11 +96,11 @@ class System:
     def run(self, evaluators, optimizer_module, optimizer_parameters):
         """Run recorder, evaluators and optimizer until the optimizer ends; return its code."""
         self.supervisor = Supervisor(evaluators, start_timeout=self.start_timeout)
+        self.start_recorder()   # it creates the bag folder; it finds a server started later
+        (self.bag / 'logs').mkdir(exist_ok=True)
         if self.discovery is not None:
             self.discovery.start(self.bag)
             self.say(self.discovery.join_instructions(self.environment['ROS_DOMAIN_ID']))
-        self.start_recorder()
-        (self.bag / 'logs').mkdir(exist_ok=True)
         for index in range(evaluators):
             self.start_evaluator(evaluator_role(index))
         self.optimizer = self.node(optimizer_module, optimizer_parameters,
