@@ -96,7 +96,7 @@ def main():
     parser.add_argument('--iterations', type=int, default=3)
     parser.add_argument('--world-states', type=int, default=1)
     parser.add_argument('--port', type=int, default=0,
-                        help='discovery server port (default: 11811 + the run\'s domain id)')
+                        help="discovery server port (default: 11811 + the run's domain id)")
     arguments = parser.parse_args()
     with claimed_domain(None) as domain:   # a domain no run of this host holds now
         pass

@@ -1,9 +1,10 @@
 """
 Runs whose processes die or whose hosts lose their link, compared with a clean run.
 
-Each run has the budget of the session's clean run (analysis_run.real_run, Task 5). What a user checks: the run finishes, prints
-what happened, and its generation summaries are those of the clean run; the bag of a run whose
-recorder was killed is closed, readable by rosbags, and holds every message of the run once.
+Each run has the budget of the session's clean run (analysis_run.real_run, Task 5). What a user
+checks: the run finishes, prints what happened, and its generation summaries are those of the
+clean run; the bag of a run whose recorder was killed is closed, readable by rosbags, and holds
+every message of the run once.
 
 The test hosts are the project's own: two network namespaces joined by a veth pair with
 multicast off, created by the test as root and deleted afterwards (with whatever still runs
@@ -231,3 +232,15 @@ def test_host_b_joins_through_the_discovery_server_then_its_link_is_cut(
     by_host = collections.Counter(ok['evaluator_id'])
     assert by_host['host-b'] >= 6 and by_host['host-a'] >= 1, by_host
     assert max(record.candidates['attempt']) >= 1, 'nothing of host B had to be sent again'
+
+
+def test_run_without_its_evaluators_says_so_and_stops_cleanly(tmp_path):
+    bag = tmp_path / 'alone'
+    run = start_run(bag, 0, budget=BUDGET, extra=['--start-timeout', '1'])
+    output, _ = run.communicate(timeout=120)
+    assert run.returncode == 1, output
+    assert 'the evaluators did not join within 1 s (--start-timeout)' in output
+    assert f'bag: {bag}' in output
+    record = read_run(bag)
+    assert not record.truncated and record.message_counts['/run_info'] == 1
+    assert (bag / 'metadata.yaml').exists()
