@@ -6,10 +6,10 @@ checks: the run finishes, prints what happened, and its generation summaries are
 clean run; the bag of a run whose recorder was killed is closed, readable by rosbags, and holds
 every message of the run once.
 
-The test hosts are the project's own: two network namespaces joined by a veth pair with
-multicast off, created by the test as root and deleted afterwards (with whatever still runs
-in them); nothing leaves them. Where namespaces are not permitted the test is skipped and
-says why.
+The test hosts are the project's own (Hosts): two network namespaces on two subnets behind a
+router namespace that carries no multicast, each with its own /dev/shm, created by the test
+as root and deleted afterwards with whatever still runs in them; nothing leaves them. Where
+namespaces are not permitted the test is skipped and says why.
 """
 
 import collections
@@ -134,41 +134,96 @@ def test_recorder_killed_mid_run(clean_run, tmp_path):
 
 
 class Hosts:
-    """Two hosts of the test's own: network namespaces A and B, a veth pair, no multicast."""
+    """
+    Two hosts of the test's own on a network without multicast.
 
-    def __init__(self):
+    Host A (10.213.1.1) and host B (10.213.2.1) are network namespaces on two subnets joined
+    by a router namespace through veth pairs. The router forwards unicast only: Linux routes
+    no multicast without a multicast routing daemon, so ROS 2's default discovery cannot
+    cross it (`multicast_reaches_b` checks that). Each host has its own /dev/shm, as separate
+    machines do; otherwise Fast DDS would find and talk to the other host's processes through
+    shared memory.
+    """
+
+    def __init__(self, folder):
         tag = os.getpid() % 100000
-        self.a, self.b = f'hc{tag}a', f'hc{tag}b'
-        self.link_a, self.link_b = f'hc{tag}va', f'hc{tag}vb'
-        self.address_a = '10.213.0.1'
+        self.a, self.b, self.router = f'hc{tag}a', f'hc{tag}b', f'hc{tag}r'
+        self.link_b = f'hc{tag}vb'
+        self.address_a, self.address_b = '10.213.1.1', '10.213.2.1'
+        self.shm = {self.a: folder / 'shm-a', self.b: folder / 'shm-b'}
+        self.created = []
 
     def create(self):
-        commands = [
-            ['netns', 'add', self.a], ['netns', 'add', self.b],
-            ['link', 'add', self.link_a, 'type', 'veth', 'peer', 'name', self.link_b],
-            ['link', 'set', self.link_a, 'netns', self.a],
-            ['link', 'set', self.link_b, 'netns', self.b],
-            ['-n', self.a, 'addr', 'add', f'{self.address_a}/24', 'dev', self.link_a],
-            ['-n', self.b, 'addr', 'add', '10.213.0.2/24', 'dev', self.link_b]]
-        for host, link in ((self.a, self.link_a), (self.b, self.link_b)):
-            commands += [['-n', host, 'link', 'set', link, 'multicast', 'off', 'up'],
-                         ['-n', host, 'link', 'set', 'lo', 'up']]
+        """Create hosts and router; return None, or why they cannot be created here."""
+        tag = self.link_b[:-2]
+        commands = []
+        for host in (self.a, self.b, self.router):
+            commands += [['netns', 'add', host], ['-n', host, 'link', 'set', 'lo', 'up']]
+        for host, link, address in ((self.a, f'{tag}va', self.address_a),
+                                    (self.b, self.link_b, self.address_b)):
+            router_link, router_address = f'{link}r', address.rsplit('.', 1)[0] + '.254'
+            commands += [
+                ['link', 'add', link, 'type', 'veth', 'peer', 'name', router_link],
+                ['link', 'set', link, 'netns', host],
+                ['link', 'set', router_link, 'netns', self.router],
+                ['-n', host, 'addr', 'add', f'{address}/24', 'dev', link],
+                ['-n', self.router, 'addr', 'add', f'{router_address}/24', 'dev', router_link],
+                ['-n', host, 'link', 'set', link, 'up'],
+                ['-n', self.router, 'link', 'set', router_link, 'up'],
+                ['-n', host, 'route', 'add', 'default', 'via', router_address]]
         for command in commands:
             done = subprocess.run(['ip', *command], capture_output=True, text=True)
+            if command[:2] == ['netns', 'add'] and done.returncode == 0:
+                self.created.append(command[2])
             if done.returncode != 0:
                 return f'`ip {" ".join(command)}` failed: {done.stderr.strip()}'
+        forward = self.on(self.router, shm=False) + [
+            'sysctl', '-qw', 'net.ipv4.ip_forward=1']
+        done = subprocess.run(forward, capture_output=True, text=True)
+        if done.returncode != 0:
+            return f'cannot make the router forward: {done.stderr.strip()}'
+        for folder in self.shm.values():
+            folder.mkdir()
         return None
 
-    def on(self, host):
-        """Return the command prefix that runs a command on host (a or b)."""
-        return ['ip', 'netns', 'exec', host]
+    def on(self, host, shm=True):
+        """Return the command prefix that runs a command on a host, with its own /dev/shm."""
+        prefix = ['ip', 'netns', 'exec', host]
+        if not shm:
+            return prefix
+        return prefix + ['unshare', '--mount', '--propagation', 'private', 'sh', '-c',
+                         f'mount --bind {self.shm[host]} /dev/shm && exec "$0" "$@"']
+
+    def multicast_reaches_b(self):
+        """Return whether a multicast datagram sent on host A arrives on host B."""
+        receive = (
+            'import socket, struct\n'
+            's = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)\n'
+            's.bind(("", 7400))\n'
+            's.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, struct.pack('
+            '"4s4s", socket.inet_aton("239.255.0.1"), socket.inet_aton("0.0.0.0")))\n'
+            'print("ready", flush=True)\n'
+            's.settimeout(1.5)\n'
+            'try:\n    s.recv(64)\n    print("received")\n'
+            'except socket.timeout:\n    print("nothing")\n')
+        send = (
+            'import socket, time\n'
+            's = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)\n'
+            's.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, 32)\n'
+            'for _ in range(5):\n'
+            '    s.sendto(b"hello", ("239.255.0.1", 7400))\n    time.sleep(0.1)\n')
+        receiver = subprocess.Popen(self.on(self.b, shm=False) + [sys.executable, '-c', receive],
+                                    stdout=subprocess.PIPE, text=True)
+        assert receiver.stdout.readline().strip() == 'ready'
+        subprocess.run(self.on(self.a, shm=False) + [sys.executable, '-c', send], check=True)
+        return receiver.communicate(timeout=30)[0].strip() == 'received'
 
     def cut_b(self):
         subprocess.run(['ip', '-n', self.b, 'link', 'set', self.link_b, 'down'], check=True)
 
     def destroy(self):
-        """Kill what still runs on the hosts and delete them (the veth pair goes with them)."""
-        for host in (self.a, self.b):
+        """Kill what still runs on the hosts and delete them (their veth pairs go with them)."""
+        for host in self.created:
             pids = subprocess.run(['ip', 'netns', 'pids', host], capture_output=True,
                                   text=True).stdout.split()
             for pid in pids:
@@ -178,12 +233,12 @@ class Hosts:
 
 
 @pytest.fixture
-def hosts():
-    if shutil.which('ip') is None:
-        pytest.skip('test hosts need the `ip` command (iproute2) for network namespaces')
+def hosts(tmp_path):
+    if shutil.which('ip') is None or shutil.which('unshare') is None:
+        pytest.skip('test hosts need `ip` (iproute2) and `unshare` (util-linux)')
     if os.geteuid() != 0:
         pytest.skip('test hosts need root to create network namespaces')
-    test_hosts = Hosts()
+    test_hosts = Hosts(tmp_path)
     try:
         problem = test_hosts.create()
         if problem:
@@ -207,12 +262,13 @@ def evaluator_on(hosts, host, evaluator_id, server, domain, log):
 def test_host_b_joins_through_the_discovery_server_then_its_link_is_cut(
         clean_run, hosts, tmp_path):
     bag, domain, port = tmp_path / 'hosts', free_domain(), 11811
+    assert not hosts.multicast_reaches_b(), 'the test network carries multicast'
     started = []
     try:
         with open(tmp_path / 'host-b.log', 'w') as log:
             started.append(evaluator_on(hosts, hosts.b, 'host-b',
                                         f'{hosts.address_a}:{port}', domain, log))
-        # host A: the run with no evaluator of its own; multicast is off on both hosts
+        # host A: the run with no evaluator of its own
         run = Watched(bag, 0, host=hosts.on(hosts.a),
                       extra=['--discovery-server', str(port), '--domain-id', str(domain)])
         run.wait_for(lambda: 'generation 1/4' in run.output())
