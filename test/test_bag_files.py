@@ -127,3 +127,4 @@ def test_recover_refuses_what_is_not_a_bag(tmp_path, content):
     path.write_bytes(content)
     done = recover(path)
     assert done.returncode == 2 and 'not an MCAP file' in done.stderr
+    assert [file.name for file in tmp_path.iterdir()] == ['x.mcap']
