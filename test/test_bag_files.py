@@ -121,10 +121,22 @@ def test_continued_bag_holds_each_message_once(tmp_path):
     assert len(ids) == len(set(ids))
 
 
-@pytest.mark.parametrize('content', [b'', b'not an mcap file at all'])
-def test_recover_refuses_what_is_not_a_bag(tmp_path, content):
+def test_recover_refuses_what_is_not_a_bag(tmp_path):
     path = tmp_path / 'x.mcap'
-    path.write_bytes(content)
+    path.write_bytes(b'not an mcap file at all')
     done = recover(path)
     assert done.returncode == 2 and 'not an MCAP file' in done.stderr
     assert [file.name for file in tmp_path.iterdir()] == ['x.mcap']
+
+
+@pytest.mark.parametrize('cut', [0, 5, 8])
+def test_file_cut_off_before_its_header_becomes_an_empty_bag(tmp_path, cut):
+    folder = tmp_path / 'early'
+    BagWriter(folder).close()
+    path = next(folder.glob('*.mcap'))
+    path.write_bytes(path.read_bytes()[:cut])
+    (folder / 'metadata.yaml').unlink()
+    done = recover(folder)
+    assert done.returncode == 0 and '0 messages kept' in done.stdout, done.stderr
+    with Reader(folder) as reader:
+        assert reader.message_count == 0

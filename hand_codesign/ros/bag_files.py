@@ -68,19 +68,19 @@ def records(path):
     """
     Yield the records of one MCAP file front to back, stopping quietly where it is cut off.
 
-    Raise BagRecoveryError for a file that does not start as an MCAP file.
+    A file cut off before its header (even an empty one) yields nothing. Raise
+    BagRecoveryError for a file that does not start as an MCAP file.
     """
-    header_seen = False
+    with open(path, 'rb') as stream:
+        start = stream.read(len(MCAP_MAGIC))
+    if start != MCAP_MAGIC[:len(start)]:
+        raise BagRecoveryError(f'{path}: not an MCAP file (it starts with {start!r}); '
+                               'expected a bag written by the hand_codesign recorder')
     with open(path, 'rb') as stream:
         try:
-            for record in StreamReader(stream).records:
-                header_seen = header_seen or type(record) is Header
-                yield record
+            yield from StreamReader(stream).records
         except (EndOfFile, McapError, struct.error, ValueError):
             pass
-    if not header_seen:
-        raise BagRecoveryError(f'{path}: not an MCAP file or cut off before its header; '
-                               'expected a bag written by the hand_codesign recorder')
 
 
 def is_closed(path):
@@ -115,12 +115,13 @@ def _rewrite(path, partial):
         writer = Writer(stream, compression=CompressionType.ZSTD)
         # the ids stay those of the cut-off file (ours count from 1 as mcap's Writer does),
         # so that they stay those of the other files of the bag
-        schema_ids, channel_ids = {}, {}
+        schema_ids, channel_ids, started = {}, {}, False
         for record in records(path):
             kind = type(record)
             if kind is Header:
                 writer.start(profile=record.profile or PROFILE,
                              library=record.library or LIBRARY)
+                started = True
             elif kind is Schema and record.id not in schema_ids:
                 schema_ids[record.id] = writer.register_schema(
                     record.name, record.encoding, record.data)
@@ -132,6 +133,8 @@ def _rewrite(path, partial):
                 writer.add_message(channel_ids[record.channel_id], record.log_time,
                                    record.data, record.publish_time, record.sequence)
                 kept += 1
+        if not started:     # cut off before its header: an empty bag file
+            writer.start(profile=PROFILE, library=LIBRARY)
         writer.finish()
         stream.flush()
         os.fsync(stream.fileno())

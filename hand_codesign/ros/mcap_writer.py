@@ -251,6 +251,7 @@ class BagWriter:
         self._writer = Writer(self._stream, chunk_size=chunk_size,
                               compression=compression_types[compression])
         self._writer.start(profile=PROFILE, library=LIBRARY)
+        self._stream.flush()   # a writer killed before its first flush leaves an MCAP file
         self._skip = skip
         self.skipped = 0
         self._schema_ids = {}
