@@ -28,6 +28,7 @@ from analysis_run import TASK
 from hand_codesign.analysis.bag import read_run
 import psutil
 import pytest
+import rclpy
 from rosbags.rosbag2 import Reader
 from test_system import free_domain
 from test_system import ROOT
@@ -87,12 +88,32 @@ class Watched:
         return self.output()
 
 
+def node_names_during(run, domain, wanted):
+    """Return the ROS node names seen on domain while run goes on, until wanted are seen."""
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=domain)
+    seen = set()
+    try:
+        observer = rclpy.create_node('observer', context=context)
+        while not wanted <= seen and run.process.poll() is None:
+            seen.update(observer.get_node_names())
+            time.sleep(0.1)
+        observer.destroy_node()
+    finally:
+        rclpy.shutdown(context=context)
+    return seen
+
+
 def test_evaluator_killed_during_start_up(clean_run, tmp_path):
-    bag = tmp_path / 'start-up'
-    run = Watched(bag, 2)
+    bag, domain = tmp_path / 'start-up', free_domain()
+    run = Watched(bag, 2, extra=['--domain-id', str(domain)])
     victim = run.wait_for(lambda: run.child('evaluator_id:=evaluator-1 '))
     victim.send_signal(signal.SIGKILL)   # the run is still waiting for its evaluators
+    # every evaluator of the run has a node name of its own, the restarted one too
+    wanted = {'evaluator_0', 'evaluator_1_r1', 'optimizer', 'recorder'}
+    names = node_names_during(run, domain, wanted)
     output = run.finish()
+    assert wanted <= names, names
     assert 'evaluator-1 exited (code -9); restarting it' in output
     assert 'evaluators ready, starting' in output
     assert summaries(bag) == summaries(clean_run)
