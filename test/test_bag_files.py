@@ -6,15 +6,16 @@ after `recover` independent readers (rosbags, mcap's indexed reader) take the ba
 flushed message is there once, and a bag continued in a next file holds each message once.
 """
 
+import contextlib
+import io
 import shutil
-import subprocess
-import sys
+import types
 
 from bag_samples import dds_bytes
 from bag_samples import interleaved
-from bag_samples import ROOT
 from bag_samples import sample_messages
 from hand_codesign.analysis.bag import read_run
+from hand_codesign.cli import main
 from hand_codesign.ros import topics
 from hand_codesign.ros.bag_files import continue_bag
 from hand_codesign.ros.mcap_writer import BagWriter
@@ -63,8 +64,12 @@ def killed_bag(folder, flush_every=10):
 
 
 def recover(path):
-    return subprocess.run([sys.executable, '-m', 'hand_codesign.cli', 'recover', str(path)],
-                          cwd=ROOT, capture_output=True, text=True)
+    """Run `hand-codesign recover path` (in this process); return code, stdout and stderr."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(['recover', str(path)])
+    return types.SimpleNamespace(returncode=code, stdout=out.getvalue(),
+                                 stderr=err.getvalue())
 
 
 def test_recover_closes_a_killed_bag_for_independent_readers(tmp_path):
