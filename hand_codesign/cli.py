@@ -27,7 +27,10 @@ VERBS = {
                'write the best design of a bag as URDF and its controller as YAML'),
     'evaluate': ('hand_codesign.commands.evaluate', 'evaluate_command',
                  "test a bag's best designs on a rig, beside their simulated prediction"),
+    'recover': ('hand_codesign.commands.recover', 'recover_command',
+                'close the bag of a recorder that was killed, so that any reader takes it'),
 }
+DEFAULT_PORT = 11811   # Fast DDS's own default for a discovery server
 
 
 def add_run_arguments(parser):
@@ -44,6 +47,15 @@ def add_run_arguments(parser):
     parser.add_argument('--domain-id', type=int,
                         help='ROS_DOMAIN_ID of the run (default: a free one of this host)')
     parser.add_argument('--quiet', action='store_true', help='print only the final summary')
+    parser.add_argument('--discovery-server', type=int, nargs='?', const=DEFAULT_PORT,
+                        metavar='PORT',
+                        help='start a Fast DDS discovery server (UDP port, default '
+                             f'{DEFAULT_PORT}) for evaluators on hosts without multicast; '
+                             'prints how they join')
+    parser.add_argument('--start-timeout', type=float, metavar='SECONDS',
+                        help='seconds the evaluators have to join before the run gives up '
+                             '(default 300 with --evaluators N > 0; 0: wait without limit, '
+                             'the default with --evaluators 0)')
     parser.add_argument('--live', type=int, nargs='?', const=8765, metavar='PORT',
                         help='serve the run live to Foxglove over WebSocket (default port '
                              '8765; 0: any free port)')

@@ -16,10 +16,14 @@ import time
 from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
+from hand_codesign.ros.discovery import DiscoveryServer
 from hand_codesign.ros.runner import claimed_domain
 from hand_codesign.ros.runner import System
 
 OPTIMIZER_MODULE = 'hand_codesign.commands.optimizer'
+# Evaluators of the run start in 0.3 to 2.7 s and are restarted when they die (core.
+# supervision); a run whose evaluators have not joined after this long will not get them.
+DEFAULT_START_TIMEOUT = 300.0
 
 
 def run_command(arguments):
@@ -31,9 +35,12 @@ def run_command(arguments):
     if bag.suffix == '.mcap':
         raise UserError(f'--bag {bag}: give a folder (the run writes its bag, result.json and '
                         'logs there), not a .mcap file')
+    discovery = (DiscoveryServer(arguments.discovery_server)
+                 if arguments.discovery_server is not None else None)
     with claimed_domain(arguments.domain_id) as domain_id:
         live = None if arguments.live is None else (arguments.live_host, arguments.live)
-        system = System(bag, domain_id, quiet=arguments.quiet, live=live)
+        system = System(bag, domain_id, quiet=arguments.quiet, discovery=discovery,
+                        start_timeout=start_timeout(arguments), live=live)
         say = system.say
         source = arguments.task or f'resumed from {arguments.resume}'
         say(f'run: task {task.name} ({source}), evaluators: {arguments.evaluators}, '
@@ -56,6 +63,13 @@ def run_command(arguments):
     print(f'bag: {bag}')
     print(f'best design: {best_design_line(bag / "result.json")}')
     return 0
+
+
+def start_timeout(arguments):
+    """Return the seconds the evaluators have to join: --start-timeout, else by --evaluators."""
+    if arguments.start_timeout is not None:
+        return arguments.start_timeout
+    return DEFAULT_START_TIMEOUT if arguments.evaluators > 0 else 0.0
 
 
 def optimizer_parameters(arguments, task, bag):
@@ -108,6 +122,12 @@ def check_arguments(arguments):
         raise UserError('--task FILE is required (e.g. config/tasks/task5.yaml)')
     if arguments.evaluators < 0:
         raise UserError(f'--evaluators: expected 0 or more, got {arguments.evaluators}')
+    if arguments.start_timeout is not None and arguments.start_timeout < 0:
+        raise UserError(f'--start-timeout: expected 0 (no limit) or more seconds, got '
+                        f'{arguments.start_timeout}')
+    if arguments.discovery_server is not None and not 0 < arguments.discovery_server < 65536:
+        raise UserError(f'--discovery-server: expected a UDP port from 1 to 65535, got '
+                        f'{arguments.discovery_server}')
     for flag in ('iterations', 'popsize', 'world_states'):
         value = getattr(arguments, flag)
         if value is not None and value < 1:

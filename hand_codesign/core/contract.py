@@ -88,3 +88,7 @@ TRIAL_FAILED = 3
 RECORDER_READY = 'recorder ready'
 # The live view (`hand-codesign run --live`) logs this, then ': ws://HOST:PORT', once it serves.
 LIVE_READY = 'live view ready'
+
+# The optimizer logs this line once its evaluators are there and the run starts; the runner's
+# supervision waits for it (its start deadline).
+EVALUATORS_READY = 'evaluators ready, starting'

@@ -31,6 +31,7 @@ import json
 import os
 import time
 
+from hand_codesign.core.contract import EVALUATORS_READY
 from hand_codesign.core.dispatch import Dispatcher
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.geometry import design_shapes
@@ -121,7 +122,7 @@ class RunController:
         """Start the run when ready, then catch silent evaluators and overdue candidates."""
         if self.started is None and subscribers_ready and self._enough_evaluators():
             self.started = self.clock()
-            self.outbox.log('evaluators ready, starting')
+            self.outbox.log(EVALUATORS_READY)
         self.advance()
 
     def _enough_evaluators(self):

@@ -37,6 +37,7 @@ rosbag2 adds and no library here writes:
   objects itself and takes no raw CDR.
 """
 
+import hashlib
 import json
 import os
 import pathlib
@@ -161,6 +162,11 @@ def type_hash(type_name):
     return ''
 
 
+def message_key(topic, data):
+    """Return what identifies a recorded message: its topic and a digest of its bytes."""
+    return topic, hashlib.blake2b(bytes(data), digest_size=16).digest()
+
+
 def _policy_name(policy):
     """Return the rmw string of a QoS policy (enum, int-like enum or already a string)."""
     if isinstance(policy, str):
@@ -213,15 +219,22 @@ class BagWriter:
     the last chunk, the summary and the footer.
     """
 
-    def __init__(self, path, chunk_size=1024 * 1024, compression='zstd'):
-        """Create the bag at path: 'x.mcap' is one file, any other path a bag directory."""
+    def __init__(self, path, chunk_size=1024 * 1024, compression='zstd', file_index=0,
+                 skip=()):
+        """
+        Create the bag at path: 'x.mcap' is one file, any other path a bag directory.
+
+        file_index > 0 continues an existing bag directory with its file <name>_<index>.mcap,
+        and write() leaves out the messages whose message_key is in skip (what the earlier
+        files hold): ros.bag_files.continue_bag, for a restarted recorder.
+        """
         self.bag_path = pathlib.Path(path)
         if self.bag_path.suffix == '.mcap':
             self.is_directory = False
             self.file_path = self.bag_path
         else:
             self.is_directory = True
-            self.file_path = self.bag_path / f'{self.bag_path.name}_0.mcap'
+            self.file_path = self.bag_path / f'{self.bag_path.name}_{file_index}.mcap'
         compression_types = {'zstd': CompressionType.ZSTD, 'lz4': CompressionType.LZ4,
                              'none': CompressionType.NONE}
         if compression not in compression_types:
@@ -229,7 +242,7 @@ class BagWriter:
                                 f'{sorted(compression_types)}')
         try:
             if self.is_directory:
-                self.bag_path.mkdir(parents=True, exist_ok=False)
+                self.bag_path.mkdir(parents=True, exist_ok=file_index > 0)
             else:
                 self.file_path.parent.mkdir(parents=True, exist_ok=True)
             self._stream = open(self.file_path, 'xb')
@@ -238,6 +251,9 @@ class BagWriter:
         self._writer = Writer(self._stream, chunk_size=chunk_size,
                               compression=compression_types[compression])
         self._writer.start(profile=PROFILE, library=LIBRARY)
+        self._stream.flush()   # a writer killed before its first flush leaves an MCAP file
+        self._skip = skip
+        self.skipped = 0
         self._schema_ids = {}
         self._channels = {}
         self.message_counts = {}
@@ -292,12 +308,15 @@ class BagWriter:
         self.message_counts[topic] = 0
 
     def write(self, topic, data, log_time=None, publish_time=None):
-        """Append one serialized message of topic; times in ns since the epoch."""
+        """Append one serialized message of topic (times in ns since the epoch) unless skipped."""
         self._check_open()
         channel = self._channels.get(topic)
         if channel is None:
             raise BagWriteError(f'topic {topic!r} has no channel in {self.file_path}: '
                                 'call add_topic first')
+        if self._skip and message_key(topic, data) in self._skip:
+            self.skipped += 1
+            return
         if log_time is None:
             log_time = time.time_ns()
         if publish_time is None:
@@ -338,39 +357,7 @@ class BagWriter:
             raise BagWriteError(f'bag {self.file_path} is already closed')
 
     def _write_metadata_yaml(self):
-        """Write the rosbag2 metadata.yaml of a bag directory."""
-        start = self.first_time or 0
-        duration = (self.last_time - self.first_time) if self.first_time is not None else 0
-        relative = self.file_path.name
-        topics = []
-        for topic, (_, type_name, qos_text) in self._channels.items():
-            topics.append({
-                'topic_metadata': {
-                    'name': topic,
-                    'type': type_name,
-                    'serialization_format': MESSAGE_ENCODING,
-                    'offered_qos_profiles': yaml.safe_load(qos_text) if qos_text else [],
-                    'type_description_hash': type_hash(type_name),
-                },
-                'message_count': self.message_counts[topic],
-            })
-        metadata = {'rosbag2_bagfile_information': {
-            'version': METADATA_VERSION,
-            'storage_identifier': 'mcap',
-            'duration': {'nanoseconds': duration},
-            'starting_time': {'nanoseconds_since_epoch': start},
-            'message_count': self.message_count,
-            'topics_with_message_count': topics,
-            'compression_format': '',
-            'compression_mode': '',
-            'relative_file_paths': [relative],
-            'files': [{'path': relative,
-                       'starting_time': {'nanoseconds_since_epoch': start},
-                       'duration': {'nanoseconds': duration},
-                       'message_count': self.message_count}],
-            'custom_data': {},
-            'ros_distro': 'jazzy',
-        }}
-        (self.bag_path / 'metadata.yaml').write_text(
-            yaml.safe_dump(metadata, sort_keys=False, default_flow_style=False),
-            encoding='utf-8')
+        """Write the rosbag2 metadata.yaml of the bag directory, covering all its files."""
+        # imported here: bag_files builds on this module's constants
+        from hand_codesign.ros.bag_files import write_metadata
+        write_metadata(self.bag_path)

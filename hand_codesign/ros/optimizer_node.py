@@ -21,9 +21,9 @@ from hand_codesign.ros.conversions import markers_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.conversions import summary_message
 from hand_codesign.ros.parameters import declare_read_only
+from hand_codesign.ros.topics import deliver
 from hand_codesign_msgs.msg import RunInfo
 import rclpy
-from rclpy.duration import Duration
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
@@ -121,8 +121,7 @@ class OptimizerNode(Node):
         getattr(self.get_logger(), level)(text)
 
     def finish(self, result):
-        for publisher in self.publishers_.values():
-            publisher.wait_for_all_acked(Duration(seconds=5.0))
+        deliver(self.publishers_.values(), self.settings['subscribers_expected'])
         if self.settings['result_file']:
             write_result(self.settings['result_file'], result, self.published)
         self.finished.set_result(True)

@@ -2,10 +2,10 @@
 The recorder node: writes every message of the co-design loop to a rosbag2-compatible MCAP bag.
 
 It subscribes to the loop's topics without decoding (raw CDR), losslessly (ros.recording has
-its QoS, parameters and bag), and writes every message as it arrives; the chunk in progress is
-flushed every ``flush_period`` seconds, so a recorder killed with SIGKILL loses at most that.
-SIGINT and SIGTERM stop it cleanly: it takes what has already arrived, then closes the bag.
-Once subscribed it logs contract.RECORDER_READY, which a runner waits for.
+its QoS, parameters and bag), and writes every message as it arrives, flushed every
+``flush_period`` s: a recorder killed with SIGKILL loses at most that, and one started with
+continue_bag continues its bag (ros.bag_files). SIGINT and SIGTERM stop it cleanly: it takes
+what has arrived, then closes the bag. Once subscribed it logs contract.RECORDER_READY.
 """
 
 import signal

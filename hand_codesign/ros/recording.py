@@ -7,8 +7,11 @@ dropped at the recorder.
 """
 
 import datetime
+import pathlib
 
 from hand_codesign.ros import topics
+from hand_codesign.ros.bag_files import BagRecoveryError
+from hand_codesign.ros.bag_files import continue_bag
 from hand_codesign.ros.mcap_writer import BagWriteError
 from hand_codesign.ros.mcap_writer import BagWriter
 from hand_codesign.ros.mcap_writer import DefinitionError
@@ -26,6 +29,9 @@ PARAMETERS = {
                '(hand_codesign.ros.topics).', None),
     'flush_period': (1.0, 'Seconds between flushes of the chunk in progress to disk: at most '
                           'this much is lost if the recorder is killed with SIGKILL.', None),
+    'continue_bag': (False, 'Continue the bag directory bag_path of a recorder that died: '
+                            'close its files (ros.bag_files), write the next file and skip '
+                            'the messages the bag already holds.', None),
 }
 
 
@@ -49,7 +55,12 @@ def default_bag_path():
 
 
 def open_bag(settings):
-    """Check the recorder's parameters and return a new BagWriter; raise RecorderError."""
+    """
+    Check the recorder's parameters and return a new BagWriter; raise RecorderError.
+
+    With continue_bag the writer writes the next file of the bag directory and skips the
+    messages its earlier files hold.
+    """
     unknown = [name for name in settings['topics'] if name not in topics.RECORDED_MESSAGE_TYPES]
     if unknown:
         raise RecorderError(
@@ -64,7 +75,21 @@ def open_bag(settings):
             message_definition(topics.type_name(topics.RECORDED_MESSAGE_TYPES[name]))
         except DefinitionError as error:
             raise RecorderError(f'topic {name}: {error}') from None
+    file_index, recorded, channels = 0, set(), []
+    if settings['continue_bag']:
+        path = pathlib.Path(settings['bag_path'])
+        if not path.is_dir() or path.suffix == '.mcap':
+            raise RecorderError(f'parameter continue_bag: bag_path {path} is not an existing '
+                                'bag directory')
+        try:
+            file_index, recorded, channels = continue_bag(path)
+        except BagRecoveryError as error:
+            raise RecorderError(f'parameter continue_bag: {error}') from None
     try:
-        return BagWriter(settings['bag_path'] or default_bag_path())
-    except BagWriteError as error:
+        writer = BagWriter(settings['bag_path'] or default_bag_path(), file_index=file_index,
+                           skip=recorded)
+        for topic, type_name, offered_qos in channels:
+            writer.add_topic(topic, type_name, offered_qos)
+        return writer
+    except (BagWriteError, DefinitionError) as error:
         raise RecorderError(f'parameter bag_path: {error}') from None

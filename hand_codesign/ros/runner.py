@@ -1,14 +1,20 @@
 """
 The processes of a run on an isolated ROS 2 domain (`hand-codesign run`, hand_codesign.commands).
 
-Starts the recorder first and waits until it is ready (and the live view for Foxglove, when
-asked for), then the evaluators and the optimizer; relays the optimizer's progress; when the
-optimizer ends (or on Ctrl-C) stops the evaluators, then the recorder and the live view, so
-that the bag holds every message and is closed properly.
+Starts the recorder first and waits until it is ready, then the evaluators and the optimizer;
+relays the optimizer's progress; when the optimizer ends (or on Ctrl-C) stops the evaluators,
+then the recorder, so that the bag holds every message and is closed properly.
+
+While the optimizer runs, the recorder and the evaluators are supervised: when one exits,
+core.supervision.Supervisor decides whether it is started again (a restarted recorder continues
+the bag in its next file, a restarted evaluator serves under a new id and a unique node name)
+or whether the run gives up and stops cleanly; this module only starts and stops processes.
+A live view for Foxglove (`--live`) and a rig's nodes (`--rig`) run beside them, unsupervised.
 
 Evaluators on other hosts can join a run: start them with the run's ROS_DOMAIN_ID (printed at
 the start) and a discovery range that reaches this host, e.g.
-`ROS_DOMAIN_ID=17 ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET ros2 run hand_codesign evaluator`.
+`ROS_DOMAIN_ID=17 ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET ros2 run hand_codesign evaluator`, or
+through the run's discovery server (ros.discovery) where the network carries no multicast.
 """
 
 import contextlib
@@ -20,8 +26,13 @@ import sys
 import threading
 import time
 
+from hand_codesign.core.contract import EVALUATORS_READY
 from hand_codesign.core.contract import LIVE_READY
 from hand_codesign.core.contract import RECORDER_READY
+from hand_codesign.core.supervision import evaluator_role
+from hand_codesign.core.supervision import node_name
+from hand_codesign.core.supervision import RECORDER
+from hand_codesign.core.supervision import Supervisor
 from hand_codesign.errors import UserError
 
 DOMAIN_IDS = range(1, 101)
@@ -49,33 +60,42 @@ def claimed_domain(requested):
 
 
 class System:
-    """The processes of one run: recorder, evaluators and optimizer, and maybe a live view."""
+    """The processes of one run: recorder, evaluators and optimizer, kept alive while it runs."""
 
-    def __init__(self, bag, domain_id, quiet=False, live=None):
+    def __init__(self, bag, domain_id, quiet=False, discovery=None, start_timeout=0.0,
+                 live=None):
         """live: None, or the (host, port) the live view serves Foxglove on."""
         self.bag = bag
-        self.quiet = quiet
         self.live = live
         self.live_view = None
+        self.quiet = quiet
         self.environment = dict(
             os.environ, ROS_DOMAIN_ID=str(domain_id), PYTHONUNBUFFERED='1',
             ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE',
                                                          'LOCALHOST'),
             AMENT_PREFIX_PATH=os.environ.get('AMENT_PREFIX_PATH', sys.prefix),
             RCUTILS_CONSOLE_OUTPUT_FORMAT='[{severity}] [{name}]: {message}')
+        self.discovery = discovery
+        if discovery is not None:
+            self.environment.update(discovery.environment())
+        self.start_timeout = start_timeout
+        self.supervisor = None
         self.recorder = None
-        self.evaluators = []   # and the rig's nodes
-        self.optimizer = None
+        self.evaluators = {}   # role -> process
+        self.rig_nodes = []
         self.rig_parameters = {}
+        self.optimizer = None
 
     def say(self, text):
         if not self.quiet:
             print(text, flush=True)
 
-    def node(self, module, parameters, **popen):
+    def node(self, module, parameters, remaps=(), **popen):
         command = [sys.executable, '-m', module, '--ros-args']
         for name, value in parameters.items():
             command += ['-p', f'{name}:={value}']
+        for remap in remaps:
+            command += ['-r', remap]
         # a session of its own: the terminal's Ctrl-C reaches only the runner, which then
         # stops the processes in the order that keeps the bag complete
         return subprocess.Popen(command, env=self.environment, start_new_session=True,
@@ -88,34 +108,55 @@ class System:
         rig: 'hardware' adds a rig evaluator (a rig joins the domain), 'sim' also a simulated
         rig (hand_codesign.ros.sim_rig_node); rig_parameters go to the simulated rig.
         """
-        self.start_recorder()
+        self.supervisor = Supervisor(evaluators, start_timeout=self.start_timeout)
+        self.start_recorder()   # it creates the bag folder; it finds a server started later
         if self.live is not None:
             self.start_live_view()
-        logs = self.bag / 'logs'
-        logs.mkdir()
-        nodes = [(f'evaluator-{index}', 'hand_codesign.ros.evaluator_node',
-                  {'evaluator_id': f'evaluator-{index}', 'subscribers_expected': 2})
-                 for index in range(evaluators)]
+        (self.bag / 'logs').mkdir(exist_ok=True)
+        if self.discovery is not None:
+            self.discovery.start(self.bag)
+            self.say(self.discovery.join_instructions(self.environment['ROS_DOMAIN_ID']))
+        for index in range(evaluators):
+            self.start_evaluator(evaluator_role(index))
+        self.start_rig(rig)
+        self.optimizer = self.node(optimizer_module, optimizer_parameters,
+                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        relay = threading.Thread(target=self.relay_optimizer, daemon=True)
+        relay.start()
+        code = self.supervise()
+        relay.join(timeout=5.0)
+        self.stop_all()
+        return code
+
+    def start_evaluator(self, role):
+        """Start the process of an evaluator role, under the id the supervisor gives it."""
+        evaluator_id = self.supervisor.started(role)
+        log = open(self.bag / 'logs' / f'{evaluator_id}.log', 'w')
+        self.evaluators[role] = self.node(
+            'hand_codesign.ros.evaluator_node',
+            {'evaluator_id': evaluator_id, 'subscribers_expected': 2},
+            remaps=[f'__node:={node_name(evaluator_id)}'],
+            stdout=log, stderr=subprocess.STDOUT)
+        log.close()
+
+    def start_rig(self, rig):
+        """Start a rig evaluator ('hardware'), and with 'sim' the simulated rig as well."""
+        nodes = []
         if rig:
             nodes.append(('rig_evaluator', 'hand_codesign.ros.rig_evaluator_node',
                           {'evaluator_id': 'rig_evaluator', 'subscribers_expected': 2}))
         if rig == 'sim':
             nodes.append(('sim_rig', 'hand_codesign.ros.sim_rig_node', self.rig_parameters))
         for name, module, parameters in nodes:
-            log = open(logs / f'{name}.log', 'w')
-            self.evaluators.append(self.node(module, parameters, stdout=log,
-                                             stderr=subprocess.STDOUT))
-        self.optimizer = self.node(optimizer_module, optimizer_parameters,
-                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        relay = threading.Thread(target=self.relay_optimizer, daemon=True)
-        relay.start()
-        code = self.wait_for_optimizer()
-        relay.join(timeout=5.0)
-        self.stop_all()
-        return code
+            with open(self.bag / 'logs' / f'{name}.log', 'w') as log:
+                self.rig_nodes.append(self.node(module, parameters, stdout=log,
+                                                stderr=subprocess.STDOUT))
 
     def start_recorder(self):
-        self.recorder = self.node('hand_codesign.ros.recorder_node', {'bag_path': self.bag},
+        """Start the recorder and wait until it records; a restart continues the same bag."""
+        restart = self.supervisor.started(RECORDER) != RECORDER
+        parameters = {'bag_path': self.bag, 'continue_bag': restart}
+        self.recorder = self.node('hand_codesign.ros.recorder_node', parameters,
                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         self.wait_until_ready(self.recorder, RECORDER_READY, 'the recorder')
 
@@ -144,24 +185,51 @@ class System:
 
     def relay_optimizer(self):
         for line in self.optimizer.stdout:
+            if EVALUATORS_READY in line:
+                self.supervisor.optimizer_ready()
             self.say(line.rstrip().replace('[INFO] [optimizer]: ', ''))
 
-    def wait_for_optimizer(self):
+    def supervise(self):
+        """Keep recorder and evaluators alive until the optimizer ends; return the run's code."""
         while self.optimizer.poll() is None:
-            if self.recorder.poll() is not None:
-                self.say(f'the recorder exited (code {self.recorder.returncode}); stopping')
-                return 1
-            if self.evaluators and all(p.poll() is not None for p in self.evaluators):
-                self.say('every evaluator exited: see the logs in '
-                         f'{self.bag / "logs"}; stopping')
+            for role, process in self.processes():
+                if process.poll() is not None:
+                    self.supervisor.exited(role, process.returncode)
+                    self.forget(role)
+                    if self.supervisor.gave_up is None:
+                        self.say(f'{role} exited (code {process.returncode}); restarting it')
+            for role in self.supervisor.due():
+                if role == RECORDER:
+                    self.start_recorder()
+                else:
+                    self.start_evaluator(role)
+            if self.supervisor.gave_up is not None:
+                self.say(f'{self.supervisor.gave_up}; see the logs in {self.bag / "logs"}; '
+                         'stopping')
                 return 1
             time.sleep(0.2)
+        if self.recorder is None:
+            # the evaluators' history holds what the bag misses while they run: record it
+            self.start_recorder()
         return self.optimizer.returncode
+
+    def processes(self):
+        """Return (role, process) of the running recorder and evaluators."""
+        running = [(RECORDER, self.recorder)] if self.recorder is not None else []
+        return running + list(self.evaluators.items())
+
+    def forget(self, role):
+        if role == RECORDER:
+            self.recorder = None
+        else:
+            del self.evaluators[role]
 
     def stop_all(self):
         """Stop optimizer and evaluators first, the recorder last: it takes what is in flight."""
-        stop([self.optimizer] + self.evaluators)
+        stop([self.optimizer] + list(self.evaluators.values()) + self.rig_nodes)
         stop([self.recorder, self.live_view])
+        if self.discovery is not None:
+            self.discovery.stop()
 
 
 def stop(processes):

@@ -10,6 +10,8 @@ subscriber that matches late (a recorder, an evaluator started by hand) still re
 was published before it matched.
 """
 
+import time
+
 from geometry_msgs.msg import PoseStamped
 from hand_codesign.core.contract import BEST_DESIGN
 from hand_codesign.core.contract import CANDIDATES
@@ -27,6 +29,7 @@ from hand_codesign_msgs.msg import GenerationSummary
 from hand_codesign_msgs.msg import RunInfo
 from hand_codesign_msgs.msg import TrialRequest
 from hand_codesign_msgs.msg import TrialStatus
+from rclpy.duration import Duration
 from rclpy.qos import DurabilityPolicy
 from rclpy.qos import HistoryPolicy
 from rclpy.qos import QoSProfile
@@ -95,3 +98,30 @@ def type_name(message_class):
     """Return the ROS type name of a message class, e.g. 'hand_codesign_msgs/msg/Candidate'."""
     module = message_class.__module__.split('.')[0]
     return f'{module}/msg/{message_class.__name__}'
+
+
+# How long a publisher that is done waits for its expected subscribers (a recorder being
+# restarted by the runner) before it gives its messages up, and for their acknowledgements.
+RETURN_WAIT = 30.0
+ACK_WAIT = 5.0
+
+
+def deliver(publishers, subscribers_expected, timeout=RETURN_WAIT):
+    """
+    Return once every publisher's expected subscribers are there and acknowledged everything.
+
+    The history of a publisher ends with its process: a recorder restarted after it died
+    (ros.runner, ros.bag_files) gets the messages it missed only from publishers that still
+    exist, so a node that is done waits for it (at most timeout s) before it exits.
+    """
+    deadline = time.monotonic() + timeout
+    for publisher in publishers:
+        while (publisher.get_subscription_count() < subscribers_expected
+               and time.monotonic() < deadline):
+            time.sleep(0.05)
+    # one deadline for all: a subscriber killed a moment ago is still matched and never
+    # acknowledges anything until its lease runs out
+    deadline = time.monotonic() + ACK_WAIT
+    for publisher in publishers:
+        left = max(0.0, deadline - time.monotonic())
+        publisher.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9)))
