@@ -7,6 +7,7 @@ numbers from the bags.
 """
 
 import csv
+import json
 import os
 import pathlib
 import signal
@@ -127,7 +128,7 @@ def test_resting_on_a_limit_while_touching_matches_the_final_state():
     assert seen == {True, False}, 'the sample should hold designs of both kinds'
 
 
-TINY = '''
+TINY = """
     import sys
     from hand_codesign.cli import main
     from hand_codesign.core import experiments
@@ -140,7 +141,7 @@ TINY = '''
         Tolerance('plane', 0.005), {'smoke': Budget('smoke', 8, 4, 12, 1)})
     sys.exit(main(['reproduce', 'tiny', '--budget', 'smoke', '--evaluators', '1',
                    '--out', sys.argv[1]]))
-'''
+"""
 
 
 def start_tiny(script, out):
@@ -209,3 +210,18 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
         assert row['seeds'] == '1' and row['unseen_worlds'] == '12'
     assert (out / 'tiny.md').read_text().count('| torque-') == 2
     assert (out / 'tiny.png').stat().st_size > 0
+
+
+def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsys):
+    out = tmp_path / 'report'
+    assert cli.main(['analyze', str(real_run.bag), '--out', str(out), '--unseen', '20']) == 0
+    printed = capsys.readouterr().out
+    assert 'On 20 unseen worlds' in printed and 'joint limits found' in printed
+    values = json.loads((out / 'unseen.json').read_text())
+    task, x, _ = campaign.final_design(real_run.bag)
+    measured = measure_worlds(x, task, unseen_world_states(task, 20))
+    plane = summarize(measured, Tolerance('plane', 0.005))
+    assert values['summaries'][0]['within'] == plane.within
+    assert values['summaries'][0]['median'] == plane.median
+    assert values['summaries'][0]['joint_limits_found'] == plane.joint_limits_found
+    assert (out / 'unseen.md').read_text().count('| ') >= 4
