@@ -116,9 +116,11 @@ EXPERIMENTS = {
         per_structure=True),
     'task1-seeded': Experiment(
         'task1-seeded',
-        'Task 1 seeded from the starting hand (CMA-ES, PD) against Task 3 from scratch '
-        '(MO-CMA-ES, torques): convergence side by side (Fig. 2)',
+        'Task 1 seeded from the starting hand (CMA-ES; PD, and the torque variant) against '
+        'Task 3 from scratch (MO-CMA-ES, torques): convergence side by side (Fig. 2)',
         (Configuration('task1-seeded-cma-16w', 'task1.yaml', 'cma', 16, 'pd'),
+         Configuration('task1-seeded-torque-cma-16w', 'task1_torque.yaml', 'cma', 16,
+                       'torque'),
          Configuration('task3-scratch-mocma-16w', 'task3.yaml', 'mocma', 16, 'torque')),
         ORIENTATION_01, _budgets((3, 8, 100, 1), (20, 16, 1000, 2), (1000, 250, 1000, 5)),
         convergence=True),
