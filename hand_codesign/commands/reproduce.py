@@ -51,7 +51,12 @@ def reproduce_command(arguments):
                  for experiment in chosen]
     for item in campaigns:
         item.prepare()
+        print(f'reproduce: {item.experiment.name}, budget {item.budget.describe()}; seeds 1 to '
+              f'{item.seeds}; {len(item.runs)} runs of {arguments.evaluators} evaluators; '
+              f'folder {item.out}', flush=True)
     progress = Progress(sum(len(item.runs) for item in campaigns))
+    for item in campaigns:
+        progress.pending += item.pending_costs()
     try:
         with termination_as_interrupt():
             for item in campaigns:
@@ -204,11 +209,13 @@ class Campaign:
 
     # ---------------------------------------------------------------- runs
 
+    def pending_costs(self):
+        """Return the rollouts of each run not finished and measured yet."""
+        return [self.rollouts(configuration) for configuration, seed in self.runs
+                if not self.measured(configuration, seed)]
+
     def run_all(self, progress, evaluators):
         """Run, resume or skip every run of the campaign, and measure each."""
-        pending = [(configuration, seed) for configuration, seed in self.runs
-                   if not self.measured(configuration, seed)]
-        progress.pending += [self.rollouts(configuration) for configuration, _ in pending]
         for configuration, seed in self.runs:
             key = experiments.run_key(configuration, seed)
             if self.measured(configuration, seed):
