@@ -264,7 +264,9 @@ class Campaign:
         """Run `hand-codesign run ...` as a child process; on an interruption stop it too."""
         command = [sys.executable, '-m', 'hand_codesign.cli', 'run'] + run_arguments
         print('reproduce: hand-codesign run ' + shlex.join(run_arguments), flush=True)
-        child = subprocess.Popen(command)
+        # its own process group: a Ctrl-C reaches it once, forwarded below, so that the
+        # run is not interrupted again while it closes its bag
+        child = subprocess.Popen(command, process_group=0)
         try:
             return child.wait()
         except KeyboardInterrupt:
