@@ -17,11 +17,17 @@ import pathlib
 
 from hand_codesign.analysis import campaign, records
 from hand_codesign.core.experiments import EXPERIMENTS, run_key
+import numpy as np
 
 
 def measured_rate(runs_dir, configuration):
-    """Return (rollouts, wall seconds) summed over the configuration's finished runs."""
+    """
+    Return (rollouts, wall seconds, structures) of the configuration's finished runs.
+
+    structures: the most structures one run searched (a hierarchy's budget is per structure).
+    """
     rollouts = seconds = 0.0
+    structures = 1
     for path in sorted(pathlib.Path(runs_dir).glob(f'{configuration.key}-seed*')):
         if path.name.count('.resume'):
             continue
@@ -37,7 +43,10 @@ def measured_rate(runs_dir, configuration):
             info = record.run_info
             rollouts += float(summary['evaluations']) * info.world_states
             seconds += float(summary['wall_time'])
-    return rollouts, seconds
+            searched = {tuple(np.ravel(value).tolist())
+                        for value in record.generation_summaries['structure']}
+            structures = max(structures, len(searched))
+    return rollouts, seconds, structures
 
 
 def main():
@@ -57,13 +66,13 @@ def main():
     total = 0.0
     print(f'{"configuration":24} {"rollouts/s here":>16} {"hours at " + budget.name:>16}')
     for configuration in experiment.configurations:
-        rollouts, seconds = measured_rate(runs_dir, configuration)
+        rollouts, seconds, structures = measured_rate(runs_dir, configuration)
         if not seconds:
             print(f'{configuration.key:24} {"no finished run":>16}')
             continue
         rate = rollouts / seconds
         needed = (budget.iterations * budget.population * configuration.world_states * seeds
-                  / rate)
+                  * structures / rate)
         total += needed
         print(f'{configuration.key:24} {rate:16.0f} {needed / 3600:16.2f}')
     hosts = total * arguments.cores / (arguments.hosts * arguments.host_cores)

@@ -112,7 +112,7 @@ EXPERIMENTS = {
         'Task 4 (turn a box 45 degrees, keep its position): the structure hierarchy with '
         'MO-CMA-ES, each structure measured on unseen worlds (Fig. 3)',
         (Configuration('hierarchy-mocma-64w', 'task4.yaml', 'mocma', 64, 'torque'),),
-        ORIENTATION_01, _budgets((2, 8, 100, 1), (10, 16, 1000, 2), (200, 150, 1000, 2)),
+        ORIENTATION_01, _budgets((2, 8, 100, 1), (20, 16, 1000, 2), (200, 150, 1000, 2)),
         per_structure=True),
     'task1-seeded': Experiment(
         'task1-seeded',
