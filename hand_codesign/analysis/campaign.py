@@ -233,34 +233,41 @@ def markdown_table(rows, tolerance, first='configuration'):
     return '\n'.join(lines) + '\n'
 
 
-def plot_errors(path, groups, tolerance, title):
-    """Box plots of the pooled initial and final errors per group [(label, record list)]."""
+def plot_errors(path, groups, tolerance, title, kinds=None):
+    """
+    Box plots of the pooled initial and final errors per group [(label, record list)].
+
+    One panel per error kind (default: the tolerance's); the tolerance is drawn on its own.
+    """
     import matplotlib
     matplotlib.use('Agg')
     from matplotlib import pyplot
-    kind = tolerance.kind
-    scale, unit = (1.0, 'rad') if kind == 'orientation' else (1000.0, 'mm')
-    figure, axis = pyplot.subplots(figsize=(max(6.0, 1.1 * len(groups) + 2), 4.5))
-    data, labels, positions = [], [], []
-    for index, (label, measured) in enumerate(groups):
-        for offset, field in ((-0.18, 'initial_errors'), (0.18, 'errors')):
-            data.append(np.concatenate([record['worlds'][field][kind] for record in measured])
-                        * scale)
-            positions.append(index + 1 + offset)
-        labels.append(label)
-    boxes = axis.boxplot(data, positions=positions, widths=0.3, whis=(5, 95),
-                         showfliers=False, patch_artist=True)
-    for number, patch in enumerate(boxes['boxes']):
-        patch.set_facecolor('lightgrey' if number % 2 == 0 else 'tab:blue')
-    axis.axhline(tolerance.limit * scale, color='tab:red', linestyle='--', linewidth=1,
-                 label=f'tolerance ({tolerance.describe()})')
-    axis.set_xticks(range(1, len(labels) + 1), labels, rotation=30, ha='right',
-                    fontsize='small')
-    axis.set_ylabel(f'{kind} error ({unit}), grey: start, blue: end')
-    axis.set_title(f'{title}\nbox p25-p75, whiskers p5-p95, unseen worlds of every seed',
-                   fontsize='medium')
-    axis.legend(fontsize='small')
-    axis.grid(True, axis='y', alpha=0.3)
+    kinds = kinds or (tolerance.kind,)
+    width = max(6.0, 1.1 * len(groups) + 2)
+    figure, axes = pyplot.subplots(1, len(kinds), figsize=(width * len(kinds), 4.5),
+                                   squeeze=False)
+    for axis, kind in zip(axes[0], kinds):
+        scale, unit = (1.0, 'rad') if kind == 'orientation' else (1000.0, 'mm')
+        data, positions = [], []
+        for index, (_, measured) in enumerate(groups):
+            for offset, field in ((-0.18, 'initial_errors'), (0.18, 'errors')):
+                data.append(np.concatenate([record['worlds'][field][kind]
+                                            for record in measured]) * scale)
+                positions.append(index + 1 + offset)
+        boxes = axis.boxplot(data, positions=positions, widths=0.3, whis=(5, 95),
+                             showfliers=False, patch_artist=True)
+        for number, patch in enumerate(boxes['boxes']):
+            patch.set_facecolor('lightgrey' if number % 2 == 0 else 'tab:blue')
+        if kind == tolerance.kind:
+            axis.axhline(tolerance.limit * scale, color='tab:red', linestyle='--',
+                         linewidth=1, label=f'tolerance ({tolerance.describe()})')
+            axis.legend(fontsize='small')
+        axis.set_xticks(range(1, len(groups) + 1), [label for label, _ in groups],
+                        rotation=30, ha='right', fontsize='small')
+        axis.set_ylabel(f'{kind} error ({unit}), grey: start, blue: end')
+        axis.grid(True, axis='y', alpha=0.3)
+    figure.suptitle(f'{title}\nbox p25-p75, whiskers p5-p95, unseen worlds of every seed',
+                    fontsize='medium')
     figure.tight_layout()
     figure.savefig(path, dpi=90)
     pyplot.close(figure)
@@ -397,7 +404,8 @@ def write_results(out, experiment, budget, seeds):
                                                  for text, values in record.items()
                                                  if text == row['structure']])
                              for row in rows],
-                    experiment.tolerance, f"{name}: each structure's best (Fig. 3)")
+                    experiment.tolerance, f"{name}: each structure's best (Fig. 3)",
+                    kinds=('position', 'orientation'))
         lines += ["## Each structure's best design (Fig. 3)", '',
                   markdown_table(rows, experiment.tolerance, 'structure'),
                   f'![{figure.name}]({figure.name})', '']
