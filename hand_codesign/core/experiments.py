@@ -122,7 +122,7 @@ EXPERIMENTS = {
          Configuration('task1-seeded-torque-cma-16w', 'task1_torque.yaml', 'cma', 16,
                        'torque'),
          Configuration('task3-scratch-mocma-16w', 'task3.yaml', 'mocma', 16, 'torque')),
-        ORIENTATION_01, _budgets((3, 8, 100, 1), (20, 16, 1000, 2), (1000, 250, 1000, 5)),
+        ORIENTATION_01, _budgets((3, 8, 100, 1), (40, 24, 1000, 2), (1000, 250, 1000, 5)),
         convergence=True),
 }
 ALL = 'all'
