@@ -115,6 +115,8 @@ class Progress:
 
     def seconds_left(self):
         """Return the estimated seconds of the pending runs, or None before any run ended."""
+        if not self.pending:
+            return 0.0
         if not self.done_runs:
             return None
         rollouts, seconds = (np.array(column, dtype=float) for column in zip(*self.done_runs))
