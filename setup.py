@@ -13,6 +13,7 @@ setup(
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob.glob('config/*.yaml')),
         ('share/' + package_name + '/config/tasks', glob.glob('config/tasks/*.yaml')),
+        ('share/' + package_name + '/config/reproduce', glob.glob('config/reproduce/*.yaml')),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

@@ -29,6 +29,8 @@ VERBS = {
                  "test a bag's best designs on a rig, beside their simulated prediction"),
     'recover': ('hand_codesign.commands.recover', 'recover_command',
                 'close the bag of a recorder that was killed, so that any reader takes it'),
+    'reproduce': ('hand_codesign.commands.reproduce', 'reproduce_command',
+                  "run one of the paper's experiments and write its tables and figures"),
 }
 DEFAULT_PORT = 11811   # Fast DDS's own default for a discovery server
 
@@ -85,10 +87,29 @@ def add_check_arguments(parser):
     parser.add_argument('--world-states', type=int, help='randomized worlds per candidate')
 
 
+def add_reproduce_arguments(parser):
+    parser.add_argument('experiment', nargs='?',
+                        help='experiment name (see --list), or "all"')
+    parser.add_argument('--list', action='store_true',
+                        help='list the experiments, one a line, its name first')
+    parser.add_argument('--budget', choices=('smoke', 'reduced', 'paper'), default='reduced',
+                        help='smoke (minutes), reduced (about an hour per experiment on 2 '
+                             "cores) or paper (Table I's); default reduced")
+    parser.add_argument('--seeds', type=int,
+                        help="seeds per configuration, 1..N (default: the budget's)")
+    parser.add_argument('--evaluators', type=int, default=2,
+                        help='evaluator processes per run (default 2)')
+    parser.add_argument('--out', help='campaign folder (default results/EXPERIMENT-BUDGET); '
+                                      'give the same folder again to continue')
+
+
 def add_bag_arguments(verb, parser):
     parser.add_argument('bag', help='bag of a run (folder or .mcap file)')
     if verb == 'analyze':
         parser.add_argument('--out', help='report folder (default: <bag>_report)')
+        parser.add_argument('--unseen', type=int, default=0, metavar='N',
+                            help='also measure the best design on N worlds it never trained '
+                                 'on, as `reproduce` does (e.g. 1000; default: skip)')
     elif verb == 'replay':
         parser.add_argument('--generation', type=int, help='generation (default: the best)')
         parser.add_argument('--rank', type=int, default=0,
@@ -128,6 +149,8 @@ def build_parser():
             add_run_arguments(verb_parser)
         elif verb == 'check':
             add_check_arguments(verb_parser)
+        elif verb == 'reproduce':
+            add_reproduce_arguments(verb_parser)
         else:
             add_bag_arguments(verb, verb_parser)
     return parser

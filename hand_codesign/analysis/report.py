@@ -38,8 +38,24 @@ def analyze_command(arguments):
     report = Report(record)
     files = report.write(out)
     print(report.summary_text())
+    if getattr(arguments, 'unseen', 0):
+        files += write_unseen(record.path, out, arguments.unseen)
     print(f'report: {out} ({", ".join(sorted(path.name for path in files))})')
     return 0
+
+
+def write_unseen(bag, out, count):
+    """Measure the best design on `count` unseen worlds; add unseen.md/.json; print it."""
+    import json
+    from hand_codesign.analysis.campaign import unseen_report
+    if count < 1:
+        raise UserError(f'--unseen: expected a positive number of worlds, got {count}')
+    lines, values = unseen_report(bag, count, processes=2)
+    paths = [out / 'unseen.md', out / 'unseen.json']
+    paths[0].write_text('\n'.join(lines) + '\n', encoding='utf-8')
+    paths[1].write_text(json.dumps(values, indent=2) + '\n', encoding='utf-8')
+    print('\n'.join(lines))
+    return paths
 
 
 def default_report_dir(bag_path):

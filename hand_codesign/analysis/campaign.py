@@ -1,0 +1,463 @@
+"""
+A reproduce campaign's folder, read back: its runs' bags, their measures, tables and figures.
+
+Layout of `--out DIR` for one experiment (`hand_codesign.commands.reproduce` writes it)::
+
+    campaign.json                 experiment, budget and seeds the campaign was started with
+    tasks/<configuration>.yaml    the pinned task text each run of the configuration used
+    runs/<configuration>-seed<k>/ the run's bag (a normal `hand-codesign run` folder);
+    runs/<...>-seed<k>.resume1/   the bag of its continuation after an interruption, and so on
+    measures/<run>.json           the run's best design measured on unseen worlds (cache)
+    <experiment>.csv, .md, *.png  the tables (a row per configuration) and figures
+
+Everything here is recomputed from the bags: delete `measures/` and the tables and run
+`reproduce` again, and the same numbers come back (the measures are deterministic).
+
+Measures (core.measures): each run's final design (the optimizer's choice, the final
+GenerationSummary's `best_x`) on the budget's unseen worlds of the run's seed. Per
+configuration over its seeds: the unseen worlds of all seeds pooled: the share within the
+tolerance, the median and 90th percentile of the error; **joint limits found**: the share of
+seeds whose design rests on a joint limit while touching the box in at least half of its
+worlds.
+"""
+
+import json
+import pathlib
+
+from hand_codesign.analysis import records
+from hand_codesign.analysis.report import Generations, generations_from_summaries, write_csv
+from hand_codesign.core.measures import (DesignMeasures, measure_worlds, summarize,
+                                         unseen_world_states, WorldMeasures)
+from hand_codesign.errors import UserError
+import numpy as np
+
+RESUME_MARK = '.resume'
+
+
+def attempts(runs_dir, key):
+    """Return the bag folders of a run in order: the first, then each continuation."""
+    runs_dir = pathlib.Path(runs_dir)
+    found = [runs_dir / key] if (runs_dir / key).exists() else []
+    number = 1
+    while (runs_dir / f'{key}{RESUME_MARK}{number}').exists():
+        found.append(runs_dir / f'{key}{RESUME_MARK}{number}')
+        number += 1
+    return found
+
+
+def next_attempt(runs_dir, key):
+    """Return the folder the next attempt of a run writes its bag to."""
+    done = attempts(runs_dir, key)
+    return pathlib.Path(runs_dir) / (key if not done else f'{key}{RESUME_MARK}{len(done)}')
+
+
+def finished_bag(runs_dir, key):
+    """Return the bag folder holding the run's result, or None while it is unfinished."""
+    done = attempts(runs_dir, key)
+    if done and (done[-1] / 'result.json').exists():
+        return done[-1]
+    return None
+
+
+def final_design(bag):
+    """Return (task, normalized genome, structure) of a finished run's best design."""
+    record = records.open_run(bag, warn=False)
+    summary = records.last_summary(record)
+    if summary is not None and summary['final'] and len(np.ravel(summary['best_genome'])):
+        structure = tuple(int(joints) for joints in np.ravel(summary['structure']))
+        x = np.asarray(summary['best_genome'], dtype=float).ravel()
+    else:
+        design = records.recorded_design(record, records.best_candidate_id(record))
+        structure, x = design.structure, design.x
+    return records.run_task_of(record, structure or None), x, structure
+
+
+def structure_bests(bags):
+    """Return {structure: (fitness, candidate id, bag)} of the best OK evaluation per structure."""
+    bests = {}
+    for bag in bags:
+        record = records.open_run(bag, warn=False)
+        candidates = record.candidates
+        if not len(candidates):
+            continue
+        structure_of = {}
+        for index, candidate_id in enumerate(np.asarray(candidates['candidate_id']).tolist()):
+            structure_of.setdefault(int(candidate_id), tuple(
+                int(joints) for joints in np.ravel(candidates['structure'][index])))
+        rows = records.evaluation_rows(record)
+        for index in np.flatnonzero(rows.ok):
+            candidate_id = int(rows.candidate_id[index])
+            structure = structure_of.get(candidate_id)
+            fitness = float(rows.fitness[index])
+            if structure is not None and (structure not in bests
+                                          or fitness < bests[structure][0]):
+                bests[structure] = (fitness, candidate_id, bag)
+    return bests
+
+
+def world_measures_dict(measures):
+    """Return WorldMeasures as JSON values (floats exact)."""
+    return {'errors': {kind: values.tolist() for kind, values in measures.errors.items()},
+            'initial_errors': {kind: values.tolist()
+                               for kind, values in measures.initial_errors.items()},
+            'collisions': measures.collisions.tolist(),
+            'limit_contacts': measures.limit_contacts.tolist()}
+
+
+def world_measures_of(values):
+    """Return the WorldMeasures of world_measures_dict()'s output."""
+    return WorldMeasures(
+        {kind: np.asarray(errors, dtype=float) for kind, errors in values['errors'].items()},
+        {kind: np.asarray(errors, dtype=float)
+         for kind, errors in values['initial_errors'].items()},
+        np.asarray(values['collisions'], dtype=bool),
+        np.asarray(values['limit_contacts'], dtype=bool))
+
+
+def measure_bag(bag, tolerance, unseen_worlds, processes=1):
+    """Return the measures record of a finished run's best design on its unseen worlds."""
+    task, x, structure = final_design(bag)
+    worlds = unseen_world_states(task, unseen_worlds)
+    measures = measure_worlds(x, task, worlds, processes)
+    return {'bag': str(bag), 'seed': task.seed, 'structure': list(structure),
+            'unseen_worlds': unseen_worlds, 'worlds': world_measures_dict(measures),
+            'summary': summarize(measures, tolerance).as_dict()}
+
+
+def measure_structures(bags, tolerance, unseen_worlds, processes=1):
+    """Return {structure text: measures record} of each structure's best design (a hierarchy)."""
+    measured = {}
+    for structure, (_, candidate_id, bag) in sorted(structure_bests(bags).items()):
+        record = records.open_run(bag, warn=False)
+        design = records.recorded_design(record, candidate_id)
+        task = records.run_task_of(record, structure)
+        measures = measure_worlds(design.x, task, unseen_world_states(task, unseen_worlds),
+                                  processes)
+        measured[structure_text(structure)] = {
+            'candidate_id': candidate_id, 'worlds': world_measures_dict(measures),
+            'summary': summarize(measures, tolerance).as_dict()}
+    return measured
+
+
+def structure_text(structure):
+    """Return a structure as the paper writes it, e.g. '(1,3)'."""
+    return '(' + ','.join(str(joints) for joints in structure) + ')'
+
+
+def cached_measures(path, compute):
+    """Return the JSON record at path, computing and writing it first if it is missing."""
+    path = pathlib.Path(path)
+    if path.exists():
+        return json.loads(path.read_text(encoding='utf-8'))
+    values = compute()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_suffix('.tmp')
+    temporary.write_text(json.dumps(values), encoding='utf-8')
+    temporary.replace(path)
+    return values
+
+
+def pooled_row(measured, tolerance):
+    """
+    Return a configuration's row over seeds from its runs' measures records.
+
+    The seeds' unseen worlds are pooled: share within, median and p90 of the error; joint
+    limits found is the share of seeds whose design found them.
+    """
+    kind = tolerance.kind
+    errors = np.concatenate([record['worlds']['errors'][kind] for record in measured])
+    initial = np.concatenate([record['worlds']['initial_errors'][kind] for record in measured])
+    summaries = [DesignMeasures.from_dict(record['summary']) for record in measured]
+    found = sum(summary.joint_limits_found for summary in summaries)
+    return {'seeds': len(measured), 'worlds': int(len(errors)),
+            'within': float(np.mean(errors < tolerance.limit)),
+            'median': float(np.median(errors)), 'p90': float(np.percentile(errors, 90)),
+            'initial_median': float(np.median(initial)),
+            'joint_limits_found': found,
+            'joint_limits_found_share': found / len(measured),
+            'limit_contact_share': float(np.mean([s.limit_contact_share for s in summaries])),
+            'collision_share': float(np.mean([s.collision_share for s in summaries]))}
+
+
+TABLE_COLUMNS = ('experiment', 'configuration', 'preset', 'policy', 'algorithm',
+                 'world_states', 'budget', 'iterations', 'population', 'seeds',
+                 'unseen_worlds', 'tolerance', 'unit', 'within', 'median', 'p90',
+                 'initial_median', 'joint_limits_found', 'joint_limits_found_share',
+                 'limit_contact_share', 'collision_share')
+
+
+def error_unit(tolerance):
+    """Return the SI unit of a tolerance's error."""
+    return 'rad' if tolerance.kind == 'orientation' else 'm'
+
+
+def write_table(out, name, rows):
+    """Write <name>.csv (SI units, exact floats) and <name>.md of the rows (dicts)."""
+    columns = [[_cell(row[column]) for row in rows] for column in TABLE_COLUMNS]
+    write_csv(pathlib.Path(out) / f'{name}.csv', list(TABLE_COLUMNS), columns)
+
+
+def _cell(value):
+    if isinstance(value, float):
+        return repr(value)
+    text = str(value)
+    return '"' + text.replace('"', '""') + '"' if any(c in text for c in ',"\n') else text
+
+
+def percent(share):
+    """Return a share as the tables write it, e.g. '58 %'."""
+    return f'{100 * share:.0f} %'
+
+
+def error_text(value, tolerance):
+    """Return an error in the table's unit: mm for distances, rad for angles."""
+    if tolerance.kind == 'orientation':
+        return f'{value:.3f} rad'
+    return f'{value * 1000:.1f} mm'
+
+
+def markdown_table(rows, tolerance, first='configuration'):
+    """Return the Markdown table of rows: a line per configuration (or structure)."""
+    lines = [f'| {first} | policy | algorithm | training worlds | seeds | unseen worlds | '
+             f'within ({tolerance.describe()}) | median | p90 | median at the start | '
+             'joint limits found |',
+             '|---|---|---|---|---|---|---|---|---|---|---|']
+    for row in rows:
+        lines.append(
+            f'| {row[first]} | {row["policy"]} | {row["algorithm"]} | {row["world_states"]} '
+            f'| {row["seeds"]} | {row["unseen_worlds"]} | {percent(row["within"])} | '
+            f'{error_text(row["median"], tolerance)} | {error_text(row["p90"], tolerance)} | '
+            f'{error_text(row["initial_median"], tolerance)} | '
+            f'{percent(row["joint_limits_found_share"])} ({row["joint_limits_found"]} of '
+            f'{row["seeds"]}) |')
+    return '\n'.join(lines) + '\n'
+
+
+def plot_errors(path, groups, tolerance, title, kinds=None):
+    """
+    Box plots of the pooled initial and final errors per group [(label, record list)].
+
+    One panel per error kind (default: the tolerance's); the tolerance is drawn on its own.
+    """
+    import matplotlib
+    matplotlib.use('Agg')
+    from matplotlib import pyplot
+    kinds = kinds or (tolerance.kind,)
+    width = max(6.0, 1.1 * len(groups) + 2)
+    figure, axes = pyplot.subplots(1, len(kinds), figsize=(width * len(kinds), 4.5),
+                                   squeeze=False)
+    for axis, kind in zip(axes[0], kinds):
+        scale, unit = (1.0, 'rad') if kind == 'orientation' else (1000.0, 'mm')
+        data, positions = [], []
+        for index, (_, measured) in enumerate(groups):
+            for offset, field in ((-0.18, 'initial_errors'), (0.18, 'errors')):
+                data.append(np.concatenate([record['worlds'][field][kind]
+                                            for record in measured]) * scale)
+                positions.append(index + 1 + offset)
+        boxes = axis.boxplot(data, positions=positions, widths=0.3, whis=(5, 95),
+                             showfliers=False, patch_artist=True)
+        for number, patch in enumerate(boxes['boxes']):
+            patch.set_facecolor('lightgrey' if number % 2 == 0 else 'tab:blue')
+        if kind == tolerance.kind:
+            axis.axhline(tolerance.limit * scale, color='tab:red', linestyle='--',
+                         linewidth=1, label=f'tolerance ({tolerance.describe()})')
+            axis.legend(fontsize='small')
+        axis.set_xticks(range(1, len(groups) + 1), [label for label, _ in groups],
+                        rotation=30, ha='right', fontsize='small')
+        axis.set_ylabel(f'{kind} error ({unit}), grey: start, blue: end')
+        axis.grid(True, axis='y', alpha=0.3)
+    figure.suptitle(f'{title}\nbox p25-p75, whiskers p5-p95, unseen worlds of every seed',
+                    fontsize='medium')
+    figure.tight_layout()
+    figure.savefig(path, dpi=90)
+    pyplot.close(figure)
+
+
+def run_generations(bags):
+    """Return (evaluations told, best fitness so far) over a run's bags, in order."""
+    told, best = [], []
+    for bag in bags:
+        record = records.open_run(bag, warn=False)
+        if not len(record.generation_summaries):
+            continue
+        names = records.objective_names_of(record)
+        generations: Generations = generations_from_summaries(record, len(names))
+        told += generations.evaluations.tolist()
+        best += generations.best_fitness.tolist()
+    return np.asarray(told, dtype=float), np.minimum.accumulate(np.asarray(best, dtype=float))
+
+
+def plot_convergence(path, panels, title):
+    """Best fitness so far against evaluations, a panel per configuration, a line per seed."""
+    import matplotlib
+    matplotlib.use('Agg')
+    from matplotlib import pyplot
+    figure, axes = pyplot.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.0),
+                                   squeeze=False)
+    for axis, (label, curves) in zip(axes[0], panels):
+        for seed, (told, best) in curves:
+            if len(told):
+                axis.plot(told, best, marker='.', label=f'seed {seed}')
+        axis.set_yscale('log')
+        axis.set_xlabel('evaluations')
+        axis.set_ylabel('best weighted fitness so far')
+        axis.set_title(label, fontsize='medium')
+        axis.grid(True, alpha=0.3)
+        axis.legend(fontsize='small')
+    figure.suptitle(title, fontsize='medium')
+    figure.tight_layout()
+    figure.savefig(path, dpi=90)
+    pyplot.close(figure)
+
+
+def read_campaign(out):
+    """Return campaign.json of a campaign folder, or raise UserError."""
+    path = pathlib.Path(out) / 'campaign.json'
+    try:
+        return json.loads(path.read_text(encoding='utf-8'))
+    except (OSError, ValueError) as error:
+        raise UserError(f'{path}: not a reproduce campaign ({error})') from None
+
+
+def load_measures(out, experiment, seeds, suffix=''):
+    """Return {configuration key: [measures record per seed]} of a campaign folder."""
+    from hand_codesign.core.experiments import run_key
+    measured = {}
+    for configuration in experiment.configurations:
+        records_of_seeds = []
+        for seed in range(1, seeds + 1):
+            path = pathlib.Path(out) / 'measures' / f'{run_key(configuration, seed)}{suffix}.json'
+            if path.exists():
+                records_of_seeds.append(json.loads(path.read_text(encoding='utf-8')))
+        measured[configuration.key] = records_of_seeds
+    return measured
+
+
+def configuration_rows(experiment, budget, measured):
+    """Return the table rows (dicts) of an experiment, one per configuration with measures."""
+    rows = []
+    for configuration in experiment.configurations:
+        if not measured[configuration.key]:
+            continue
+        row = {'experiment': experiment.name, 'configuration': configuration.key,
+               'preset': configuration.preset, 'policy': configuration.policy,
+               'algorithm': configuration.algorithm_name,
+               'world_states': configuration.world_states, 'budget': budget.name,
+               'iterations': budget.iterations, 'population': budget.population,
+               'unseen_worlds': budget.unseen_worlds,
+               'tolerance': experiment.tolerance.describe(),
+               'unit': error_unit(experiment.tolerance)}
+        row.update(pooled_row(measured[configuration.key], experiment.tolerance))
+        rows.append(row)
+    return rows
+
+
+def structure_rows(experiment, budget, measured):
+    """Return a row per (configuration, structure): each structure's best over the seeds."""
+    rows = []
+    for configuration in experiment.configurations:
+        structures = {}
+        for record in measured[configuration.key]:
+            for structure, values in record.items():
+                structures.setdefault(structure, []).append(values)
+        for structure in sorted(structures, key=lambda text: (text.count(','), text)):
+            row = {'experiment': experiment.name,
+                   'configuration': f'{configuration.key} {structure}', 'structure': structure,
+                   'preset': configuration.preset, 'policy': configuration.policy,
+                   'algorithm': configuration.algorithm_name,
+                   'world_states': configuration.world_states, 'budget': budget.name,
+                   'iterations': budget.iterations, 'population': budget.population,
+                   'unseen_worlds': budget.unseen_worlds,
+                   'tolerance': experiment.tolerance.describe(),
+                   'unit': error_unit(experiment.tolerance)}
+            row.update(pooled_row(structures[structure], experiment.tolerance))
+            rows.append(row)
+    return rows
+
+
+def write_results(out, experiment, budget, seeds):
+    """Write the tables (.csv, .md) and figures of a campaign folder; return their paths."""
+    out = pathlib.Path(out)
+    measured = load_measures(out, experiment, seeds)
+    rows = configuration_rows(experiment, budget, measured)
+    name = experiment.name
+    paths = [out / f'{name}.csv', out / f'{name}.md', out / f'{name}.png']
+    write_table(out, name, rows)
+    lines = [f'# {name}', '', experiment.summary + '.', '',
+             f'Budget {budget.describe()}; seeds 1 to {seeds}; a row per configuration, '
+             'the unseen worlds of its seeds pooled.', '',
+             markdown_table(rows, experiment.tolerance)]
+    groups = [(f'{row["policy"]} {row["algorithm"]} {row["world_states"]}w',
+               measured[row['configuration']]) for row in rows]
+    if groups:
+        plot_errors(paths[2], groups, experiment.tolerance, f'{name}, {budget.name} budget')
+        lines += [f'![{paths[2].name}]({paths[2].name})', '']
+    else:
+        paths.pop()
+    if experiment.per_structure:
+        by_structure = load_measures(out, experiment, seeds, '.structures')
+        rows = structure_rows(experiment, budget, by_structure)
+        write_table(out, f'{name}-structures', rows)
+        figure = out / f'{name}-structures.png'
+        plot_errors(figure, [(row['structure'], [values for record in
+                                                 by_structure[row['configuration'].split()[0]]
+                                                 for text, values in record.items()
+                                                 if text == row['structure']])
+                             for row in rows],
+                    experiment.tolerance, f"{name}: each structure's best (Fig. 3)",
+                    kinds=('position', 'orientation'))
+        lines += ["## Each structure's best design (Fig. 3)", '',
+                  markdown_table(rows, experiment.tolerance, 'structure'),
+                  f'![{figure.name}]({figure.name})', '']
+        paths += [out / f'{name}-structures.csv', figure]
+    if experiment.convergence:
+        figure = out / f'{name}-convergence.png'
+        panels = []
+        for configuration in experiment.configurations:
+            from hand_codesign.core.experiments import run_key
+            curves = [(seed, run_generations(attempts(out / 'runs', run_key(configuration,
+                                                                            seed))))
+                      for seed in range(1, seeds + 1)]
+            panels.append((f'{configuration.key} ({configuration.algorithm_name})', curves))
+        plot_convergence(figure, panels, f'{name}, {budget.name} budget')
+        lines += ['## Convergence', '', f'![{figure.name}]({figure.name})', '']
+        paths.append(figure)
+    paths[1].write_text('\n'.join(lines), encoding='utf-8')
+    return paths
+
+
+UNSEEN_TOLERANCES = (('plane', 0.005), ('position', 0.005), ('orientation', 0.1))
+
+
+def unseen_report(bag, count, processes=1):
+    """
+    Return (Markdown lines, JSON record) of a run's best design on `count` unseen worlds.
+
+    The same measures as a reproduce campaign's: for each error (plane, position,
+    orientation) the share of worlds within 5 mm or 0.1 rad, its median and p90, and
+    whether the design rests on a joint limit while touching the object in at least half of
+    the worlds (joint limits found).
+    """
+    from hand_codesign.core.measures import Tolerance
+    task, x, structure = final_design(bag)
+    measures = measure_worlds(x, task, unseen_world_states(task, count), processes)
+    summaries = [summarize(measures, Tolerance(kind, limit))
+                 for kind, limit in UNSEEN_TOLERANCES]
+    lines = [f'## On {count} unseen worlds', '',
+             f'The best design (structure {list(structure)}) on {count} worlds drawn from '
+             f'another stream of seed {task.seed} than the training worlds.', '',
+             '| error | within | median | p90 | median at the start |', '|---|---|---|---|---|']
+    for summary in summaries:
+        tolerance = summary.tolerance
+        lines.append(f'| {tolerance.describe()} | {percent(summary.within)} | '
+                     f'{error_text(summary.median, tolerance)} | '
+                     f'{error_text(summary.p90, tolerance)} | '
+                     f'{error_text(summary.initial_median, tolerance)} |')
+    first = summaries[0]
+    lines += ['', f'Resting on a joint limit while touching the object: '
+                  f'{percent(first.limit_contact_share)} of the worlds; joint limits found '
+                  f'(at least half): {"yes" if first.joint_limits_found else "no"}. Start '
+                  f'collisions: {percent(first.collision_share)} of the worlds.']
+    record = {'bag': str(bag), 'seed': task.seed, 'unseen_worlds': count,
+              'summaries': [summary.as_dict() for summary in summaries]}
+    return lines, record

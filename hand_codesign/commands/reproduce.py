@@ -1,0 +1,313 @@
+"""
+`hand-codesign reproduce EXPERIMENT [--budget B] [--seeds N] [--evaluators E] [--out DIR]`.
+
+Runs one of the paper's experiments (core.experiments; `reproduce --list` names them) as a
+campaign: every configuration once per seed 1..N, each a normal `hand-codesign run` with its
+own bag under DIR/runs/, then measures every final design on worlds it never trained on
+(core.measures) and writes the experiment's tables (`.csv`, `.md`, a row per configuration)
+and figures into DIR (layout: hand_codesign.analysis.campaign).
+
+Interrupted (Ctrl-C, SIGTERM, a reboot), the same command continues: finished runs are kept,
+the interrupted run is resumed from its bag (`hand-codesign run --resume`, into a new bag
+beside it), measures already computed are reused. Progress covers the whole campaign: run k
+of n and the time left, estimated from the runs finished in this session, per rollout of the
+budget.
+"""
+
+import json
+import pathlib
+import shlex
+import signal
+import subprocess
+import sys
+import time
+
+from hand_codesign.analysis import campaign
+from hand_codesign.commands.run import termination_as_interrupt
+from hand_codesign.core import experiments
+from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.task import TaskError
+from hand_codesign.errors import UserError
+import numpy as np
+
+INTERRUPTED = 130
+RESUME_REFUSED = 2  # `run --resume` exit code of a bag it cannot resume (UserError)
+STOP_WAIT = 120.0  # s a run may take to close its bag after an interruption
+
+
+def reproduce_command(arguments):
+    """Run (or continue) an experiment's campaign and write its tables; return exit code."""
+    if arguments.list:
+        for name in experiments.experiment_names():
+            summary = ('every experiment above, one after the other' if name == experiments.ALL
+                       else experiments.EXPERIMENTS[name].summary)
+            print(f'{name}  {summary}')
+        return 0
+    chosen = chosen_experiments(arguments.experiment)
+    check_arguments(arguments)
+    out = pathlib.Path(arguments.out or f'results/{arguments.experiment}-{arguments.budget}')
+    campaigns = [Campaign(experiment, arguments.budget, arguments.seeds,
+                          out if len(chosen) == 1 else out / experiment.name)
+                 for experiment in chosen]
+    for item in campaigns:
+        item.prepare()
+        print(f'reproduce: {item.experiment.name}, budget {item.budget.describe()}; seeds 1 to '
+              f'{item.seeds}; {len(item.runs)} runs of {arguments.evaluators} evaluators; '
+              f'folder {item.out}', flush=True)
+    progress = Progress(sum(len(item.runs) for item in campaigns))
+    for item in campaigns:
+        progress.pending += item.pending_costs()
+    try:
+        with termination_as_interrupt():
+            for item in campaigns:
+                item.run_all(progress, arguments.evaluators)
+                item.write_results()
+    except KeyboardInterrupt:
+        print('reproduce: interrupted; run the same command again to continue (finished runs '
+              'are kept, the interrupted one resumes from its bag)', file=sys.stderr)
+        return INTERRUPTED
+    return 0
+
+
+def chosen_experiments(name):
+    """Return the Experiments of a name (all of them for `all`), or raise UserError."""
+    if name is None:
+        raise UserError('name an experiment (see `hand-codesign reproduce --list`)')
+    if name == experiments.ALL:
+        return list(experiments.EXPERIMENTS.values())
+    if name not in experiments.EXPERIMENTS:
+        raise UserError(f'unknown experiment "{name}"; expected one of '
+                        f'{", ".join(experiments.experiment_names())}')
+    return [experiments.EXPERIMENTS[name]]
+
+
+def check_arguments(arguments):
+    """Raise UserError for a bad --seeds or --evaluators."""
+    if arguments.seeds is not None and arguments.seeds < 1:
+        raise UserError(f'--seeds: expected 1 or more, got {arguments.seeds}')
+    if arguments.evaluators < 1:
+        raise UserError(f'--evaluators: expected 1 or more, got {arguments.evaluators}')
+
+
+class Progress:
+    """
+    Run k of n of the whole campaign and the time left, from this session's runs.
+
+    A run costs a fixed part (starting processes, measuring) and a part per rollout of its
+    budget: both are fitted to the runs done in this session (least squares), so the estimate
+    holds for campaigns of tiny runs and of long ones.
+    """
+
+    def __init__(self, total):
+        self.total = total
+        self.number = 0
+        self.done_runs = []  # (rollouts, seconds) of the runs done in this session
+        self.pending = []  # rollouts of each run not done yet
+
+    def announce(self, key, state):
+        """Print the line of the next run."""
+        self.number += 1
+        seconds = self.seconds_left()
+        left = ('time left known after the first run' if seconds is None
+                else f'about {format_duration(seconds)} left')
+        print(f'reproduce: run {self.number} of {self.total}: {key} ({state}); {left}',
+              flush=True)
+
+    def seconds_left(self):
+        """Return the estimated seconds of the pending runs, or None before any run ended."""
+        if not self.pending:
+            return 0.0
+        if not self.done_runs:
+            return None
+        rollouts, seconds = (np.array(column, dtype=float) for column in zip(*self.done_runs))
+        if len(set(rollouts.tolist())) >= 2:
+            per_rollout, fixed = np.polyfit(rollouts, seconds, 1)
+            per_rollout, fixed = max(per_rollout, 0.0), max(fixed, 0.0)
+        else:
+            per_rollout, fixed = float(np.sum(seconds) / max(np.sum(rollouts), 1.0)), 0.0
+        return sum(fixed + per_rollout * cost for cost in self.pending)
+
+    def done(self, rollouts, seconds):
+        """Count a run finished in this session."""
+        self.done_runs.append((rollouts, seconds))
+        self.pending.remove(rollouts)
+
+
+def format_duration(seconds):
+    """Return e.g. '1 h 05 min', '12 min' or '40 s'."""
+    seconds = int(round(seconds))
+    if seconds < 60:
+        return f'{seconds} s'
+    minutes = seconds // 60
+    if minutes < 60:
+        return f'{minutes} min'
+    return f'{minutes // 60} h {minutes % 60:02d} min'
+
+
+class Campaign:
+    """One experiment's campaign in its folder: its runs, measures and tables."""
+
+    def __init__(self, experiment, budget_name, seeds, out):
+        self.experiment = experiment
+        self.budget = experiment.budget(budget_name)
+        self.seeds = seeds or self.budget.seeds
+        self.out = pathlib.Path(out)
+        self.runs_dir = self.out / 'runs'
+        self.runs = [(configuration, seed) for configuration in experiment.configurations
+                     for seed in range(1, self.seeds + 1)]
+
+    # ---------------------------------------------------------------- setup
+
+    def prepare(self):
+        """Create or check the campaign folder; pin the task texts; check they load."""
+        path = self.out / 'campaign.json'
+        settings = {'experiment': self.experiment.name, 'budget': self.budget.name,
+                    'iterations': self.budget.iterations,
+                    'population': self.budget.population,
+                    'unseen_worlds': self.budget.unseen_worlds}
+        if path.exists():
+            recorded = campaign.read_campaign(self.out)
+            differs = [key for key, value in settings.items() if recorded.get(key) != value]
+            if differs:
+                raise UserError(
+                    f'--out {self.out}: holds a campaign of {recorded.get("experiment")} at '
+                    f'budget {recorded.get("budget")} ({", ".join(differs)} differ); choose '
+                    'another --out')
+        try:
+            (self.out / 'tasks').mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise UserError(f'--out {self.out}: cannot create the folder: {error}') from None
+        path.write_text(json.dumps(dict(settings, seeds=self.seeds), indent=2) + '\n',
+                        encoding='utf-8')
+        for configuration in self.experiment.configurations:
+            task_file = self.task_file(configuration)
+            if not task_file.exists():
+                preset = experiments.pinned_dir() / configuration.preset
+                try:
+                    text = preset.read_text(encoding='utf-8')
+                except OSError as error:
+                    raise UserError(f'{preset}: cannot read the pinned preset: {error}')
+                task_file.write_text(experiments.configuration_task_text(configuration, text),
+                                     encoding='utf-8')
+            try:
+                self.run_task(configuration, 1)
+            except TaskError as error:
+                raise UserError(str(error))
+
+    def task_file(self, configuration):
+        return self.out / 'tasks' / f'{configuration.key}.yaml'
+
+    def run_task(self, configuration, seed):
+        """Return the Task of one run (the campaign's task text and the budget)."""
+        return load_run_task(self.task_file(configuration), seed, self.budget.iterations,
+                             self.budget.population, configuration.world_states)
+
+    def rollouts(self, configuration):
+        """Return the rollouts one run of a configuration costs at this budget (estimate)."""
+        task = self.run_task(configuration, 1)
+        structures = 1 if task.hierarchy is None else 6
+        return (self.budget.iterations * self.budget.population * configuration.world_states
+                * structures + self.budget.unseen_worlds)
+
+    # ---------------------------------------------------------------- runs
+
+    def pending_costs(self):
+        """Return the rollouts of each run not finished and measured yet."""
+        return [self.rollouts(configuration) for configuration, seed in self.runs
+                if not self.measured(configuration, seed)]
+
+    def run_all(self, progress, evaluators):
+        """Run, resume or skip every run of the campaign, and measure each."""
+        for configuration, seed in self.runs:
+            key = experiments.run_key(configuration, seed)
+            if self.measured(configuration, seed):
+                progress.announce(key, 'finished and measured: kept')
+                continue
+            started = time.monotonic()
+            bag = campaign.finished_bag(self.runs_dir, key)
+            state = ('finished: measuring' if bag else 'resuming from its bag'
+                     if campaign.attempts(self.runs_dir, key) else 'starting')
+            progress.announce(key, state)
+            if bag is None:
+                bag = self.run_one(configuration, seed, evaluators)
+            self.measure(configuration, seed, bag, max(1, evaluators))
+            progress.done(self.rollouts(configuration), time.monotonic() - started)
+
+    def run_one(self, configuration, seed, evaluators):
+        """Run (or resume) one run to its end; return its finished bag."""
+        key = experiments.run_key(configuration, seed)
+        self.runs_dir.mkdir(parents=True, exist_ok=True)
+        previous = campaign.attempts(self.runs_dir, key)
+        bag = campaign.next_attempt(self.runs_dir, key)
+        common = ['--bag', str(bag), '--evaluators', str(evaluators), '--quiet']
+        if previous:
+            code = self.call(['--resume', str(previous[-1])] + common)
+            if code != RESUME_REFUSED:
+                return self.checked(key, bag, code)
+            print(f'reproduce: {previous[-1]} cannot be resumed (see above): starting the run '
+                  'afresh', flush=True)
+        task = self.run_task(configuration, seed)
+        code = self.call(['--task', str(self.task_file(configuration)), '--seed', str(seed),
+                          '--iterations', str(task.iterations), '--popsize',
+                          str(task.population), '--world-states', str(task.num_world_states)]
+                         + common)
+        return self.checked(key, bag, code)
+
+    def checked(self, key, bag, code):
+        """Return the bag of a run that ended with exit code `code`, or stop the campaign."""
+        if code == INTERRUPTED:
+            raise KeyboardInterrupt
+        if code != 0 or not (bag / 'result.json').exists():
+            raise UserError(f'run {key} failed (exit code {code}); its bag and logs: {bag}')
+        return bag
+
+    @staticmethod
+    def call(run_arguments):
+        """Run `hand-codesign run ...` as a child process; on an interruption stop it too."""
+        command = [sys.executable, '-m', 'hand_codesign.cli', 'run'] + run_arguments
+        print('reproduce: hand-codesign run ' + shlex.join(run_arguments), flush=True)
+        # its own process group: a Ctrl-C reaches it once, forwarded below, so that the
+        # run is not interrupted again while it closes its bag
+        child = subprocess.Popen(command, process_group=0)
+        try:
+            return child.wait()
+        except KeyboardInterrupt:
+            if child.poll() is None:
+                child.send_signal(signal.SIGINT)
+            try:
+                child.wait(timeout=STOP_WAIT)
+            except subprocess.TimeoutExpired:
+                child.kill()
+                child.wait()
+            raise
+
+    # ---------------------------------------------------------------- measures
+
+    def measures_path(self, configuration, seed, suffix=''):
+        return self.out / 'measures' / f'{experiments.run_key(configuration, seed)}{suffix}.json'
+
+    def measured(self, configuration, seed):
+        """Return True if the run is finished and every measure of it is cached."""
+        paths = [self.measures_path(configuration, seed)]
+        if self.experiment.per_structure:
+            paths.append(self.measures_path(configuration, seed, '.structures'))
+        return all(path.exists() for path in paths)
+
+    def measure(self, configuration, seed, bag, processes):
+        """Measure a finished run's design (and each structure's best) on unseen worlds."""
+        tolerance, count = self.experiment.tolerance, self.budget.unseen_worlds
+        campaign.cached_measures(self.measures_path(configuration, seed),
+                                 lambda: campaign.measure_bag(bag, tolerance, count, processes))
+        if self.experiment.per_structure:
+            bags = campaign.attempts(self.runs_dir, experiments.run_key(configuration, seed))
+            campaign.cached_measures(
+                self.measures_path(configuration, seed, '.structures'),
+                lambda: campaign.measure_structures(bags, tolerance, count, processes))
+
+    # ---------------------------------------------------------------- results
+
+    def write_results(self):
+        """Write the experiment's tables and figures from its runs' measures."""
+        paths = campaign.write_results(self.out, self.experiment, self.budget, self.seeds)
+        print(f'reproduce: {self.experiment.name} ({self.budget.describe()}, {self.seeds} '
+              f'seeds): {", ".join(str(path) for path in paths)}', flush=True)

@@ -1,0 +1,162 @@
+"""
+The paper's experiments as `hand-codesign reproduce` runs them: configurations and budgets.
+
+An Experiment is a list of Configurations (a pinned preset, an algorithm and a number of
+world states), a Tolerance that says when a world counts as a success, and Budgets (`smoke`,
+`reduced`, `paper`: generations x candidates per configuration, the unseen worlds every final
+design is measured on, and the default number of seeds). A campaign runs every configuration
+once per seed (1..N), each as a normal `hand-codesign run`.
+
+Pinned presets: the task files live, as the paper ran them, in `config/reproduce/` (copies of
+`config/tasks/` frozen when the experiments were defined), and every option a run depends on
+(algorithm, seed, generations, population, world states) is passed explicitly; a campaign
+copies the task text it runs into its own folder and resumes from that copy. So later changes
+to the presets in `config/tasks/` do not change what `reproduce` reproduces.
+
+Budgets: `paper` is Table I's; `reduced` fits this 2-core machine in about an hour per
+experiment (Tasks 5 and 6) to a few hours (Tasks 1 and 4); `smoke` takes minutes.
+"""
+
+import dataclasses
+import pathlib
+import re
+import sys
+from typing import Dict, Tuple
+
+from hand_codesign.core.measures import Tolerance
+
+ALGORITHM_NAMES = {'cma': 'CMA-ES', 'mocma': 'MO-CMA-ES'}
+BUDGET_NAMES = ('smoke', 'reduced', 'paper')
+
+
+@dataclasses.dataclass(frozen=True)
+class Configuration:
+    """One line of an experiment's table: a pinned preset run with one algorithm."""
+
+    key: str  # file-safe name, unique in the experiment
+    preset: str  # file name in config/reproduce/
+    algorithm: str  # cma | mocma
+    world_states: int  # training worlds per candidate
+    policy: str  # torque | pd (for the table)
+
+    @property
+    def algorithm_name(self):
+        """Return the algorithm as the paper names it (CMA-ES, MO-CMA-ES)."""
+        return ALGORITHM_NAMES[self.algorithm]
+
+
+@dataclasses.dataclass(frozen=True)
+class Budget:
+    """Generations and candidates per run, unseen worlds per design, default seeds."""
+
+    name: str
+    iterations: int
+    population: int
+    unseen_worlds: int
+    seeds: int
+
+    def describe(self):
+        """Return e.g. 'smoke: 4 generations x 8 candidates, 100 unseen worlds'."""
+        return (f'{self.name}: {self.iterations} generations x {self.population} candidates '
+                f'per run, measured on {self.unseen_worlds} unseen worlds')
+
+
+@dataclasses.dataclass(frozen=True)
+class Experiment:
+    """A named set of configurations, their tolerance, budgets and what to draw."""
+
+    name: str
+    summary: str
+    configurations: Tuple[Configuration, ...]
+    tolerance: Tolerance
+    budgets: Dict[str, Budget]
+    per_structure: bool = False  # hierarchy: measure each structure's best (Fig. 3)
+    convergence: bool = False  # draw the configurations' convergence side by side
+
+    def budget(self, name):
+        """Return the Budget called name, or raise KeyError."""
+        return self.budgets[name]
+
+
+def _budgets(smoke, reduced, paper):
+    return {name: Budget(name, *values)
+            for name, values in zip(BUDGET_NAMES, (smoke, reduced, paper))}
+
+
+def _joint_limit_configurations(preset, name, policies):
+    return tuple(
+        Configuration(f'{policy}-{algorithm}-{worlds}w', policy_preset, algorithm, worlds,
+                      policy)
+        for policy, policy_preset in zip(policies, (preset, f'{name}_pd.yaml'))
+        for algorithm in ('cma', 'mocma') for worlds in (8, 64, 128))
+
+
+PLANE_5MM = Tolerance('plane', 0.005)
+ORIENTATION_01 = Tolerance('orientation', 0.1)
+
+EXPERIMENTS = {
+    'task5-joint-limits': Experiment(
+        'task5-joint-limits',
+        'Task 5 (align a box on the plane, fixed 2x2 hand): CMA-ES and MO-CMA-ES on 8, 64 and '
+        '128 worlds, torque and PD policies; joint limits found',
+        _joint_limit_configurations('task5.yaml', 'task5', ('torque', 'pd')), PLANE_5MM,
+        _budgets((4, 8, 100, 1), (16, 16, 1000, 2), (100, 80, 1000, 5))),
+    'task6-rotation': Experiment(
+        'task6-rotation',
+        'Task 6 (turn a box 45 degrees on the plane, fixed 2x2 hand): CMA-ES and MO-CMA-ES on '
+        '8, 64 and 128 worlds; joint limits found',
+        _joint_limit_configurations('task6.yaml', 'task6', ('torque',)), ORIENTATION_01,
+        _budgets((4, 8, 100, 1), (25, 16, 1000, 2), (100, 80, 1000, 5))),
+    'task4-hierarchy': Experiment(
+        'task4-hierarchy',
+        'Task 4 (turn a box 45 degrees, keep its position): the structure hierarchy with '
+        'MO-CMA-ES, each structure measured on unseen worlds (Fig. 3)',
+        (Configuration('hierarchy-mocma-64w', 'task4.yaml', 'mocma', 64, 'torque'),),
+        ORIENTATION_01, _budgets((2, 8, 100, 1), (20, 16, 1000, 2), (200, 150, 1000, 2)),
+        per_structure=True),
+    'task1-seeded': Experiment(
+        'task1-seeded',
+        'Task 1 seeded from the starting hand (CMA-ES; PD, and the torque variant) against '
+        'Task 3 from scratch (MO-CMA-ES, torques): convergence side by side (Fig. 2)',
+        (Configuration('task1-seeded-cma-16w', 'task1.yaml', 'cma', 16, 'pd'),
+         Configuration('task1-seeded-torque-cma-16w', 'task1_torque.yaml', 'cma', 16,
+                       'torque'),
+         Configuration('task3-scratch-mocma-16w', 'task3.yaml', 'mocma', 16, 'torque')),
+        ORIENTATION_01, _budgets((3, 8, 100, 1), (40, 24, 1000, 2), (1000, 250, 1000, 5)),
+        convergence=True),
+}
+ALL = 'all'
+
+
+def experiment_names():
+    """Return the experiment names `reproduce` accepts, `all` last."""
+    return list(EXPERIMENTS) + [ALL]
+
+
+def pinned_dir():
+    """Return the folder of the pinned presets (source tree, else the installed share)."""
+    source = pathlib.Path(__file__).resolve().parents[2] / 'config' / 'reproduce'
+    if source.is_dir():
+        return source
+    return pathlib.Path(sys.prefix) / 'share' / 'hand_codesign' / 'config' / 'reproduce'
+
+
+_ALGORITHM_LINE = re.compile(r'^(\s+algorithm:\s*)(\w+)', re.MULTILINE)
+
+
+def configuration_task_text(configuration, preset_text):
+    """Return the pinned preset text with the configuration's algorithm set."""
+    text, count = _ALGORITHM_LINE.subn(
+        lambda match: match.group(1) + configuration.algorithm, preset_text, count=1)
+    if count != 1:
+        raise ValueError(f'{configuration.preset}: no "optimizer.algorithm" line to pin')
+    return text
+
+
+def run_key(configuration, seed):
+    """Return the name of a run of a campaign, e.g. 'torque-cma-8w-seed1'."""
+    return f'{configuration.key}-seed{seed}'
+
+
+__all__ = ['ALGORITHM_NAMES', 'Budget', 'Configuration', 'Experiment', 'EXPERIMENTS',
+           'experiment_names', 'pinned_dir', 'run_key']

@@ -1,0 +1,227 @@
+"""
+`hand-codesign reproduce`: experiments, pinned presets, measures on unseen worlds, campaigns.
+
+The campaign test runs a tiny experiment of two real runs (real processes, real PyBullet),
+interrupts it in the middle of its second run, continues it, and recomputes the table's
+numbers from the bags.
+"""
+
+import csv
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+from hand_codesign import cli
+from hand_codesign.analysis import campaign, records
+from hand_codesign.core import experiments
+from hand_codesign.core.evaluate import evaluate
+from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.measures import (fingers, LIMIT_TOLERANCE, measure_worlds,
+                                         resting_on_limit_touching, summarize, Tolerance,
+                                         unseen_world_states)
+from hand_codesign.core.task import load_task, parse_task
+from hand_codesign.core.worlds import world_states
+import numpy as np
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+TASK5 = ROOT / 'config' / 'reproduce' / 'task5.yaml'
+
+
+def test_list_names_every_experiment_first_on_its_line(capsys):
+    assert cli.main(['reproduce', '--list']) == 0
+    lines = capsys.readouterr().out.splitlines()
+    names = [line.split()[0] for line in lines]
+    assert names == experiments.experiment_names()
+    for name in ('task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded',
+                 'all'):
+        assert name in names
+
+
+def test_unknown_experiment_is_one_line(capsys):
+    assert cli.main(['reproduce', 'task9']) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count('\n') == 0 and 'task9' in error and 'task5-joint-limits' in error
+
+
+@pytest.mark.parametrize('name', list(experiments.EXPERIMENTS))
+def test_configurations_pin_their_algorithm_and_preset(name):
+    experiment = experiments.EXPERIMENTS[name]
+    keys = [configuration.key for configuration in experiment.configurations]
+    assert len(set(keys)) == len(keys)
+    assert set(experiment.budgets) == {'smoke', 'reduced', 'paper'}
+    for configuration in experiment.configurations:
+        preset = experiments.pinned_dir() / configuration.preset
+        text = experiments.configuration_task_text(configuration, preset.read_text())
+        task = parse_task(text, source=str(preset))
+        assert task.algorithm == configuration.algorithm
+        assert configuration.algorithm_name in ('CMA-ES', 'MO-CMA-ES')
+
+
+def test_unseen_worlds_are_disjoint_from_training_and_nested():
+    task = load_task(TASK5).replace(seed=3)
+    unseen = unseen_world_states(task, 200)
+    training = world_states(task, 200)
+    assert not set(unseen) & set(training)
+    assert unseen[:50] == unseen_world_states(task, 50)
+    assert unseen != unseen_world_states(task.replace(seed=4), 200)
+    assert unseen == unseen_world_states(task, 200)
+
+
+def test_measures_come_from_the_evaluated_rollout():
+    task = load_task(TASK5).replace(seed=1)
+    x = np.random.default_rng(5).random(len(genome_spec(task).names))
+    worlds = unseen_world_states(task, 6)
+    measured = measure_worlds(x, task, worlds)
+    evaluation = evaluate(x, task, worlds=worlds)
+    assert np.array_equal(measured.errors['position'], evaluation.final_errors[:, 0])
+    assert np.array_equal(measured.errors['orientation'], evaluation.final_errors[:, 1])
+    # the plane error leaves out the height: at most the 3-D distance
+    assert np.all(measured.errors['plane'] <= measured.errors['position'] + 1e-12)
+
+
+class FinalState:
+    """Records at each frame the joints, their limits and the links touching the object."""
+
+    def __init__(self):
+        self.last = None
+
+    def __call__(self, step, simulator):
+        client, hand = simulator.client, simulator.hand
+        links = simulator.model.links
+        angles = [state[0] for state in client.getJointStates(hand, list(range(len(links))))]
+        touching = {point[3] for point in client.getContactPoints(hand, simulator.object_body)
+                    if point[8] <= 0.001}
+        self.last = (angles, [(link.lower_limit, link.upper_limit) for link in links],
+                     touching, fingers(links), resting_on_limit_touching(simulator))
+
+
+def test_resting_on_a_limit_while_touching_matches_the_final_state():
+    from hand_codesign.core.evaluate import _TaskContext, evaluate_design
+    task = load_task(TASK5).replace(seed=1)
+    spec = genome_spec(task)
+    generator = np.random.default_rng(0)
+    world = unseen_world_states(task, 1)
+    seen = set()
+    for _ in range(12):
+        x = generator.random(len(spec.names))
+        flag = bool(measure_worlds(x, task, world).limit_contacts[0])
+        final = FinalState()
+        design = _TaskContext.of(task).genome_spec().decode(x)
+        evaluation = evaluate_design(design, task, world, on_frame=final, frame_every=300)
+        if evaluation.collision:
+            assert not flag
+            continue
+        angles, limits, touching, groups, _ = final.last
+        expected = any(
+            touching.intersection(finger)
+            and any(angles[j] <= limits[j][0] + LIMIT_TOLERANCE
+                    or angles[j] >= limits[j][1] - LIMIT_TOLERANCE for j in finger)
+            for finger in groups)
+        assert flag == expected
+        seen.add(flag)
+    assert seen == {True, False}, 'the sample should hold designs of both kinds'
+
+
+TINY = """
+    import sys
+    from hand_codesign.cli import main
+    from hand_codesign.core import experiments
+    from hand_codesign.core.experiments import Budget, Configuration, Experiment
+    from hand_codesign.core.measures import Tolerance
+    experiments.EXPERIMENTS['tiny'] = Experiment(
+        'tiny', 'two small Task 5 runs',
+        (Configuration('torque-cma-2w', 'task5.yaml', 'cma', 2, 'torque'),
+         Configuration('torque-mocma-16w', 'task5.yaml', 'mocma', 16, 'torque')),
+        Tolerance('plane', 0.005), {'smoke': Budget('smoke', 8, 4, 12, 1)})
+    sys.exit(main(['reproduce', 'tiny', '--budget', 'smoke', '--evaluators', '1',
+                   '--out', sys.argv[1]]))
+"""
+
+
+def start_tiny(script, out):
+    return subprocess.Popen([sys.executable, str(script), str(out)], cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env=dict(os.environ))
+
+
+def wait_for_a_generation(bag, process, timeout=180.0):
+    """Wait until the bag of a run in progress holds a GenerationSummary."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and process.poll() is None:
+        if bag.exists() and any(bag.glob('*.mcap')):
+            try:
+                if len(records.open_run(bag, warn=False).generation_summaries):
+                    return
+            except Exception:  # noqa: B902: a bag being written may not open yet
+                pass
+        time.sleep(0.2)
+    raise AssertionError(f'no generation in {bag} in time')
+
+
+def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(tmp_path):
+    script = tmp_path / 'tiny.py'
+    script.write_text(textwrap.dedent(TINY))
+    out = tmp_path / 'campaign'
+    runs = out / 'runs'
+    first = start_tiny(script, out)
+    try:
+        wait_for_a_generation(runs / 'torque-mocma-16w-seed1', first)
+        first.send_signal(signal.SIGINT)
+        output, _ = first.communicate(timeout=180)
+    finally:
+        if first.poll() is None:
+            first.kill()
+    assert first.returncode == 130, output
+    assert 'run 2 of 2' in output and 'run the same command again' in output
+    finished = runs / 'torque-cma-2w-seed1' / 'result.json'
+    stamp = finished.stat().st_mtime_ns
+    assert not (runs / 'torque-mocma-16w-seed1' / 'result.json').exists()
+
+    second = start_tiny(script, out)
+    output, _ = second.communicate(timeout=300)
+    assert second.returncode == 0, output
+    assert 'run 1 of 2: torque-cma-2w-seed1 (finished and measured: kept)' in output
+    assert 'run 2 of 2: torque-mocma-16w-seed1 (resuming from its bag)' in output
+    assert finished.stat().st_mtime_ns == stamp
+    assert not (runs / 'torque-cma-2w-seed1.resume1').exists()
+    resumed = runs / 'torque-mocma-16w-seed1.resume1'
+    assert records.open_run(resumed, warn=False).run_info.resumed_from
+
+    with open(out / 'tiny.csv', newline='', encoding='utf-8') as stream:
+        table = {row['configuration']: row for row in csv.DictReader(stream)}
+    assert set(table) == {'torque-cma-2w', 'torque-mocma-16w'}
+    assert table['torque-mocma-16w']['algorithm'] == 'MO-CMA-ES'
+    assert table['torque-cma-2w']['algorithm'] == 'CMA-ES'
+    tolerance = Tolerance('plane', 0.005)
+    for key, bag in (('torque-cma-2w', finished.parent), ('torque-mocma-16w', resumed)):
+        task, x, _ = campaign.final_design(bag)
+        summary = summarize(measure_worlds(x, task, unseen_world_states(task, 12)), tolerance)
+        row = table[key]
+        assert float(row['within']) == summary.within
+        assert float(row['median']) == summary.median
+        assert float(row['p90']) == summary.p90
+        assert int(row['joint_limits_found']) == int(summary.joint_limits_found)
+        assert row['seeds'] == '1' and row['unseen_worlds'] == '12'
+    assert (out / 'tiny.md').read_text().count('| torque-') == 2
+    assert (out / 'tiny.png').stat().st_size > 0
+
+
+def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsys):
+    out = tmp_path / 'report'
+    assert cli.main(['analyze', str(real_run.bag), '--out', str(out), '--unseen', '20']) == 0
+    printed = capsys.readouterr().out
+    assert 'On 20 unseen worlds' in printed and 'joint limits found' in printed
+    values = json.loads((out / 'unseen.json').read_text())
+    task, x, _ = campaign.final_design(real_run.bag)
+    measured = measure_worlds(x, task, unseen_world_states(task, 20))
+    plane = summarize(measured, Tolerance('plane', 0.005))
+    assert values['summaries'][0]['within'] == plane.within
+    assert values['summaries'][0]['median'] == plane.median
+    assert values['summaries'][0]['joint_limits_found'] == plane.joint_limits_found
+    assert (out / 'unseen.md').read_text().count('| ') >= 4
