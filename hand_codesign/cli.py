@@ -42,6 +42,11 @@ def add_run_arguments(parser):
     parser.add_argument('--domain-id', type=int,
                         help='ROS_DOMAIN_ID of the run (default: a free one of this host)')
     parser.add_argument('--quiet', action='store_true', help='print only the final summary')
+    parser.add_argument('--write-key-file', action='append', default=[], metavar='ID=PATH',
+                        help='write the key of evaluator ID to PATH (mode 0600, outside the bag) '
+                             'for an evaluator on another host: -p key_file:=PATH')
+    parser.add_argument('--audit-fraction', type=float,
+                        help='share of answers a second evaluator checks (default 0.1; 0: none)')
 
 
 def add_check_arguments(parser):

@@ -8,6 +8,12 @@ then the recorder, so that the bag holds every message and is closed properly.
 Evaluators on other hosts can join a run: start them with the run's ROS_DOMAIN_ID (printed at
 the start) and a discovery range that reaches this host, e.g.
 `ROS_DOMAIN_ID=17 ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET ros2 run hand_codesign evaluator`.
+
+Keys (hand_codesign.core.signing): the optimizer gets the run's secret, each evaluator only
+its own Credential, through a variable of the environment the child inherits, never on a
+command line (any user can read command lines in `ps`; /proc/PID/environ only the same user
+and root, like a 0600 file, without a file to leave behind) and never in the bag folder. The
+recorder gets no key, and the nodes remove the variable from their environment once read.
 """
 
 import contextlib
@@ -20,6 +26,8 @@ import threading
 import time
 
 from hand_codesign.core.contract import RECORDER_READY
+from hand_codesign.core.signing import CREDENTIAL_VARIABLE
+from hand_codesign.core.signing import SECRET_VARIABLE
 from hand_codesign.errors import UserError
 
 DOMAIN_IDS = range(1, 101)
@@ -49,11 +57,14 @@ def claimed_domain(requested):
 class System:
     """The processes of one run: recorder, evaluators and optimizer."""
 
-    def __init__(self, bag, domain_id, quiet=False):
+    def __init__(self, bag, domain_id, quiet=False, keys=None):
         self.bag = bag
         self.quiet = quiet
+        self.keys = keys  # core.signing.RunKeys, or None for an unsigned run
+        inherited = {name: value for name, value in os.environ.items()
+                     if name not in (SECRET_VARIABLE, CREDENTIAL_VARIABLE)}
         self.environment = dict(
-            os.environ, ROS_DOMAIN_ID=str(domain_id), PYTHONUNBUFFERED='1',
+            inherited, ROS_DOMAIN_ID=str(domain_id), PYTHONUNBUFFERED='1',
             ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE',
                                                          'LOCALHOST'),
             AMENT_PREFIX_PATH=os.environ.get('AMENT_PREFIX_PATH', sys.prefix),
@@ -66,14 +77,22 @@ class System:
         if not self.quiet:
             print(text, flush=True)
 
-    def node(self, module, parameters, **popen):
+    def node(self, module, parameters, key=None, **popen):
         command = [sys.executable, '-m', module, '--ros-args']
         for name, value in parameters.items():
             command += ['-p', f'{name}:={value}']
         # a session of its own: the terminal's Ctrl-C reaches only the runner, which then
         # stops the processes in the order that keeps the bag complete
-        return subprocess.Popen(command, env=self.environment, start_new_session=True,
-                                **popen)
+        environment = dict(self.environment, **(key or {}))
+        return subprocess.Popen(command, env=environment, start_new_session=True, **popen)
+
+    def key_of(self, evaluator_id=None):
+        """Return the key variable of an evaluator, or with None the optimizer's secret."""
+        if self.keys is None:
+            return None
+        if evaluator_id is None:
+            return {SECRET_VARIABLE: self.keys.secret.hex()}
+        return {CREDENTIAL_VARIABLE: self.keys.credential(evaluator_id).text()}
 
     def run(self, evaluators, optimizer_module, optimizer_parameters):
         """Run recorder, evaluators and optimizer until the optimizer ends; return its code."""
@@ -85,8 +104,8 @@ class System:
             self.evaluators.append(self.node(
                 'hand_codesign.ros.evaluator_node', {'evaluator_id': f'evaluator-{index}',
                                                      'subscribers_expected': 2},
-                stdout=log, stderr=subprocess.STDOUT))
-        self.optimizer = self.node(optimizer_module, optimizer_parameters,
+                self.key_of(f'evaluator-{index}'), stdout=log, stderr=subprocess.STDOUT))
+        self.optimizer = self.node(optimizer_module, optimizer_parameters, self.key_of(),
                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         relay = threading.Thread(target=self.relay_optimizer, daemon=True)
         relay.start()
