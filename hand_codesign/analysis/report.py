@@ -23,6 +23,7 @@ It prints a summary table to the terminal.
 import pathlib
 
 from hand_codesign.analysis import records
+from hand_codesign.analysis.trust import trust_facts
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.errors import UserError
 import numpy as np
@@ -287,6 +288,7 @@ class Report:
         if summary is not None:
             facts.append(('stopped', 'yes: ' + (summary['stop_reason'] or 'final')
                           if summary['final'] else 'no final summary (run interrupted?)'))
+        facts += trust_facts(record)
         if record.truncated:
             facts.append(('bag state', 'truncated: read up to the cut'))
         return facts
