@@ -129,7 +129,7 @@ def parse_secret(text, source):
         secret = b''
     if len(secret) != SECRET_BYTES:
         raise SigningError(f'{source}: expected {2 * SECRET_BYTES} hex digits (a run secret), '
-                        f'got {len(text.strip())} characters')
+                           f'got {len(text.strip())} characters')
     return secret
 
 
@@ -186,8 +186,8 @@ class Credential:
                              bytes.fromhex(fields['run_info_key']))
         except (ValueError, KeyError, TypeError, AttributeError) as error:
             raise SigningError(f'{source}: expected a line of JSON with evaluator_id, key and '
-                            f'run_info_key (as `hand-codesign run --write-key-file` writes), '
-                            f'got {type(error).__name__}: {error}')
+                               f'run_info_key (as `hand-codesign run --write-key-file` writes), '
+                               f'got {type(error).__name__}: {error}')
         if len(credential.key) != 32 or len(credential.run_info_key) != 32:
             raise SigningError(f'{source}: key and run_info_key must be 64 hex digits each')
         return credential
