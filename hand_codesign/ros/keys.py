@@ -13,11 +13,11 @@ import os
 import pathlib
 import socket
 
-from hand_codesign.core.signing import CREDENTIAL_VARIABLE
 from hand_codesign.core.signing import Credential
+from hand_codesign.core.signing import CREDENTIAL_VARIABLE
 from hand_codesign.core.signing import parse_secret
-from hand_codesign.core.signing import RunKeys
 from hand_codesign.core.signing import run_digest
+from hand_codesign.core.signing import RunKeys
 from hand_codesign.core.signing import SECRET_VARIABLE
 from hand_codesign.core.signing import SigningError
 
