@@ -119,6 +119,14 @@ def test_the_draws_come_from_the_seed_and_have_the_fraction():
     assert not any(drawn(7, i, 0.0) for i in range(100))
 
 
+def test_forged_answers_of_this_run_are_counted_in_the_summaries():
+    task, clock = task5(), Clock()
+    controller = RunController(task, RUN, Outbox(), clock=clock)
+    controller.forged(RUN, 'evaluator-0')
+    controller.forged('another-run', 'evaluator-0')
+    assert controller.trust_counts()['rejected_evaluations'] == 1
+
+
 def test_a_mismatch_is_settled_by_a_third_and_the_liar_quarantined():
     audits = Audits(seed=7, fraction=0.0001)
     audits.start_batch()

@@ -16,6 +16,7 @@ work on the RunRecord it returns:
 """
 
 import dataclasses
+import json
 import pathlib
 import sys
 
@@ -38,10 +39,27 @@ def beside_bag(bag_path, suffix):
     return path.parent / f'{stem}{suffix}'
 
 
-def open_run(path, warn=True):
-    """Return the RunRecord of the bag at path; raise UserError for an unreadable bag."""
+def result_run_id(path):
+    """
+    Return the run id of the result.json in a bag folder, or None.
+
+    The optimizer of the run wrote it; anything on the run's domain can put a RunInfo of
+    another run into the bag, and the bag holds no key to tell which is the run's own.
+    """
+    result = pathlib.Path(path) / 'result.json'
     try:
-        record = read_run(path)
+        return json.loads(result.read_text()).get('run_id') if result.is_file() else None
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def open_run(path, warn=True):
+    """Return the RunRecord of the bag at path (its result.json's run, if any); UserError."""
+    try:
+        try:
+            record = read_run(path, run_id=result_run_id(path))
+        except BagError:
+            record = read_run(path)
     except BagError as error:
         raise UserError(str(error)) from None
     if warn:

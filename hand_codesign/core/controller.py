@@ -139,8 +139,10 @@ class RunController:
         candidate = next(c for c in self.batch if c.candidate_id == candidate_id)
         self.dispatcher.add_again(candidate, self.attempts.get(candidate_id, 0), exclude)
 
-    def forged(self, evaluator_id):
-        """Count an Evaluation whose signature failed; it is otherwise ignored."""
+    def forged(self, run_id, evaluator_id):
+        """Count an Evaluation of this run whose signature failed; it is otherwise ignored."""
+        if not self.ours(run_id):
+            return
         self.rejected_evaluations += 1
         if self.rejected_evaluations in (1, 10, 100, 1000):
             self.outbox.log(f'{self.rejected_evaluations} evaluation(s) with a missing or '

@@ -103,7 +103,7 @@ class OptimizerNode(Node):
     def on_evaluation(self, message):
         key = message.run_id, message.candidate_id, message.evaluator_id
         if not self.signer.valid(message):
-            self.run.forged(message.evaluator_id)
+            self.run.forged(message.run_id, message.evaluator_id)
         elif message.status == STATUS_REJECTED:
             self.run.rejected(*key, message.reason)
         else:
@@ -117,8 +117,8 @@ class OptimizerNode(Node):
     def send_summary(self, summary):
         self.publish(topics.GENERATION_SUMMARY, summary_message(self.run.run_id, summary))
 
-    def log(self, text, level='info'):
-        getattr(self.get_logger(), level)(text)
+    def log(self, text, level='info'):  # 2 call sites: rclpy ties a severity to each
+        self.get_logger().warning(text) if level == 'warning' else self.get_logger().info(text)
 
     def finish(self, result):
         for publisher in self.publishers_.values():
