@@ -239,6 +239,9 @@ def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run
     assert (f'{trust["rejected_evaluations"]} evaluation(s) ignored by the optimizer'
             in report.stdout), report.stdout + report.stderr
     assert f'{ignored} RunInfo/Candidate message(s) ignored' in report.stdout
+    # the forgeries are in the bag, but the analysis takes what the optimizer told
+    assert 'untold (answers the summaries contradict)' in report.stdout
+    assert f'fitness {result["fitness"]:.4g}' in report.stdout.split('best design:')[1]
 
 
 def test_an_evaluator_with_its_key_that_lies_is_caught(one_evaluator_run, tmp_path):

@@ -8,8 +8,9 @@ work on the RunRecord it returns:
 - `run_task_of(record, structure, world_states)`: the Task of the run (as every process of the
   run rebuilt it, `core.runs.run_task`), for one structure of a hierarchy if asked;
 - `evaluation_rows(record)`: every Evaluation joined with its Candidate (genome, structure),
-  with a status of 'ok', 'rejected' or 'duplicate' (a later answer for an already evaluated
-  candidate, which the optimizer ignored);
+  with a status of 'ok', 'rejected', 'duplicate' (a later answer for an already evaluated
+  candidate, which the optimizer ignored, or an audit's) or 'untold' (an answer that differs
+  from what the summaries say was told: a forgery the optimizer ignored, or a liar's);
 - `recorded_design(record, candidate_id)`: one recorded candidate with its recorded result;
 - `best_candidate_id(record)` and `ranked_candidate_id(record, generation, rank)`: which design
   a verb works on by default and on request.
@@ -146,7 +147,7 @@ class EvaluationRows:
     generation: np.ndarray
     candidate_id: np.ndarray
     evaluator_id: np.ndarray     # object array of str
-    status: np.ndarray           # object array: 'ok', 'rejected' or 'duplicate'
+    status: np.ndarray           # object array: 'ok', 'rejected', 'duplicate' or 'untold'
     reason: np.ndarray           # object array of str
     objectives: np.ndarray       # (rows, objectives), NaN for rejections
     fitness: np.ndarray
@@ -181,6 +182,30 @@ def _statuses(evaluations):
     repeated = np.ones(len(ok_rows), dtype=bool)
     repeated[first] = False
     statuses[ok_rows[repeated]] = 'duplicate'
+    return statuses
+
+
+def _told_statuses(statuses, evaluations, objectives, told):
+    """
+    Return statuses with the summaries' word on what was told.
+
+    For a candidate the summaries hold, the first OK answer equal to the told objectives bit
+    for bit is 'ok', later equal ones 'duplicate', different ones 'untold'.
+    """
+    if not told:
+        return statuses
+    statuses = statuses.copy()
+    taken = set()
+    for row in np.flatnonzero(np.isin(statuses, ('ok', 'duplicate'))):
+        candidate_id = int(evaluations['candidate_id'][row])
+        value = told.get(candidate_id)
+        if value is None:
+            continue
+        if objectives[row].tobytes() != np.asarray(value, dtype=float).tobytes():
+            statuses[row] = 'untold'
+        else:
+            statuses[row] = 'duplicate' if candidate_id in taken else 'ok'
+            taken.add(candidate_id)
     return statuses
 
 
@@ -220,14 +245,16 @@ def evaluation_rows(record):
         record.candidates) else (np.array([], dtype=np.uint64), np.array([], dtype=np.int64))
     candidate_row = _lookup(unique, first, evaluations['candidate_id'])
     gene_names, genes = _genes(record.candidates, candidate_row)
+    objectives = _row_matrix(evaluations['objectives'], np.arange(count), len(names))
     return EvaluationRows(
         objective_names=names,
         generation=np.asarray(evaluations['generation'], dtype=np.int64),
         candidate_id=np.asarray(evaluations['candidate_id'], dtype=np.uint64),
         evaluator_id=np.asarray(evaluations['evaluator_id'], dtype=object),
-        status=_statuses(evaluations),
+        status=_told_statuses(_statuses(evaluations), evaluations, objectives,
+                              told_objectives(record)),
         reason=np.asarray(evaluations['reason'], dtype=object),
-        objectives=_row_matrix(evaluations['objectives'], np.arange(count), len(names)),
+        objectives=objectives,
         fitness=np.asarray(evaluations['fitness'], dtype=float),
         collision=np.asarray(evaluations['collision'], dtype=bool),
         unstable_worlds=np.asarray(evaluations['unstable_worlds'], dtype=np.int64),
@@ -275,6 +302,10 @@ def recorded_design(record, candidate_id):
         matches = np.flatnonzero(
             (np.asarray(evaluations['candidate_id'], dtype=np.uint64) == np.uint64(candidate_id))
             & (np.asarray(evaluations['status']) == STATUS_OK))
+        told = told_objectives(record).get(int(candidate_id))
+        if told is not None:  # not a forgery or a liar's answer, which the optimizer ignored
+            matches = [row for row in matches if np.asarray(
+                evaluations['objectives'][row], dtype=float).tobytes() == told.tobytes()]
         if len(matches):
             evaluation = evaluations.row(int(matches[0]))
             objectives = np.asarray(evaluation['objectives'], dtype=float)

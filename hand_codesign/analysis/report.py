@@ -271,7 +271,10 @@ class Report:
         wall = self.wall_time
         facts += [
             ('evaluations', f'{ok} ok, {int((rows.status == "rejected").sum())} rejected, '
-                            f'{int((rows.status == "duplicate").sum())} duplicate'),
+                            f'{int((rows.status == "duplicate").sum())} duplicate'
+                            + (f', {int((rows.status == "untold").sum())} untold (answers '
+                               'the summaries contradict)' if (rows.status == 'untold').any()
+                               else '')),
             ('generations', f'{len(self.generations)} (from {self.generations.source})'),
             ('wall time', f'{wall:.1f} s'),
             ('evaluations per second', f'{ok / wall:.2f}' if wall > 0 else 'n/a'),
