@@ -78,10 +78,13 @@ def test_honest_evaluators_are_audited_and_the_told_values_do_not_change():
     result, summaries, outbox, told = run_with(('a', 'b', 'c'), lambda *_: False)
     assert np.array_equal(told, alone), 'audits changed what the search was told'
     trust = result['trust']
-    assert trust['quarantined'] == [] and trust['audit_evaluations'] >= 3   # probation
+    # one probation audit per evaluator, then only the drawn candidates
+    lucky = sum(drawn(task5().seed, candidate_id, 0.1) for candidate_id in range(18))
+    assert trust['quarantined'] == [] and 3 <= trust['audit_evaluations'] <= 3 + lucky
     assert result['evaluations'] == 18, 'audits counted as progress'
-    audited = sum(len(s['audited_ids']) for s in summaries)
-    assert audited == trust['audit_evaluations']
+    audited = [i for s in summaries for i in s['audited_ids']]
+    assert len(audited) == trust['audit_evaluations']
+    assert {i for i in range(18) if drawn(task5().seed, i, 0.1)} <= set(audited)
     line = [text for _, text in outbox.lines if text.startswith('generation 3/3')][0]
     assert '18 evaluations' in line and f'{trust["audit_evaluations"]} audit evaluations' in line
 
@@ -160,3 +163,20 @@ def test_a_quarantine_redoes_what_only_the_liar_answered():
 def test_the_result_is_the_same_with_any_number_of_honest_evaluators(evaluators):
     result, _, _, _ = run_with(evaluators, lambda evaluator, _: evaluator == 'liar')
     assert result['fitness'] == truth().fitness and result['trust']['quarantined'] == ['liar']
+
+
+def test_answers_of_an_evaluator_on_probation_wait_for_its_first_audit():
+    audits = Audits(seed=7, fraction=0.0001)
+    audits.start_batch()
+    assert audits.take(1, 'a', [1.0], True).exclude == {'a'}   # a's probation audit
+    held = audits.take(2, 'a', [2.0], True)
+    assert held.value is None and not held.exclude and audits.holding
+    verdict = audits.take(1, 'b', [1.0], True)
+    assert verdict.value.tolist() == [1.0] and {2: [2.0]} == {
+        key: value.tolist() for key, value in verdict.released.items()}
+    assert not audits.holding and audits.audit_evaluations == 1
+    audits.take(3, 'liar', [3.5], True)
+    audits.take(4, 'liar', [4.5], True)                         # held
+    audits.take(3, 'a', [3.0], True)
+    verdict = audits.take(3, 'b', [3.0], True)
+    assert verdict.liars == ['liar'] and verdict.redo == [4] and not audits.holding

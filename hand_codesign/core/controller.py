@@ -121,7 +121,7 @@ class RunController:
         verdict = self.audits.take(candidate_id, evaluator_id, objectives, bool(others))
         if verdict.value is not None:
             self.results[candidate_id] = verdict.value
-        else:
+        elif verdict.exclude:
             self._send_again(candidate_id, verdict.exclude)
             if len(verdict.exclude) > 1:
                 self.outbox.log(f'candidate {candidate_id}: {", ".join(sorted(verdict.exclude))}'
@@ -130,6 +130,7 @@ class RunController:
             self.dispatcher.quarantine(liar)
             self.outbox.log(f'evaluator {liar} returned objectives that others contradict: '
                             'quarantined, its answers are evaluated again', 'warning')
+        self.results.update(verdict.released)
         for redone in verdict.redo:
             self.results.pop(redone, None)
             self._send_again(redone, ())
@@ -181,7 +182,7 @@ class RunController:
                 self.attempts[candidate.candidate_id] = attempt + 1
                 self.outbox.send_candidate(candidate, evaluator_id, attempt, self.genome_names,
                                            world_states)
-            if self.dispatcher.unfinished:
+            if self.dispatcher.unfinished or self.audits.holding:
                 return
             self._tell_batch()
 
