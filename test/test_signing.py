@@ -1,4 +1,4 @@
-"""Keys and signatures of a run's messages: what is signed, who can sign, what an evaluator takes."""
+"""Keys and signatures of a run's messages: what is signed, who signs, what evaluators take."""
 
 import hashlib
 import hmac

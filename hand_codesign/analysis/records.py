@@ -303,9 +303,10 @@ def recorded_design(record, candidate_id):
             (np.asarray(evaluations['candidate_id'], dtype=np.uint64) == np.uint64(candidate_id))
             & (np.asarray(evaluations['status']) == STATUS_OK))
         told = told_objectives(record).get(int(candidate_id))
-        if told is not None:  # not a forgery or a liar's answer, which the optimizer ignored
-            matches = [row for row in matches if np.asarray(
+        if told is not None:  # rather the answer told than a forgery or a liar's
+            same = [row for row in matches if np.asarray(
                 evaluations['objectives'][row], dtype=float).tobytes() == told.tobytes()]
+            matches = same or matches
         if len(matches):
             evaluation = evaluations.row(int(matches[0]))
             objectives = np.asarray(evaluation['objectives'], dtype=float)
