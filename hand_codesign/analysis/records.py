@@ -192,20 +192,22 @@ def _told_statuses(statuses, evaluations, objectives, told):
     For a candidate the summaries hold, the first OK answer equal to the told objectives bit
     for bit is 'ok', later equal ones 'duplicate', different ones 'untold'.
     """
-    if not told:
+    if not told or not objectives.shape[1]:
         return statuses
+    told_ids = np.array(sorted(told), dtype=np.uint64)
+    told_values = np.array([told[int(i)] for i in told_ids], dtype=float)
+    rows = np.flatnonzero(np.isin(statuses, ('ok', 'duplicate')))
+    ids = np.asarray(evaluations['candidate_id'], dtype=np.uint64)[rows]
+    position = np.minimum(np.searchsorted(told_ids, ids), len(told_ids) - 1)
+    known = told_ids[position] == ids
+    rows, ids, position = rows[known], ids[known], position[known]
+    same = np.all(objectives[rows].view(np.uint64)
+                  == told_values[position].view(np.uint64), axis=1)   # bit for bit
     statuses = statuses.copy()
-    taken = set()
-    for row in np.flatnonzero(np.isin(statuses, ('ok', 'duplicate'))):
-        candidate_id = int(evaluations['candidate_id'][row])
-        value = told.get(candidate_id)
-        if value is None:
-            continue
-        if objectives[row].tobytes() != np.asarray(value, dtype=float).tobytes():
-            statuses[row] = 'untold'
-        else:
-            statuses[row] = 'duplicate' if candidate_id in taken else 'ok'
-            taken.add(candidate_id)
+    statuses[rows[~same]] = 'untold'
+    statuses[rows[same]] = 'duplicate'
+    _, first = np.unique(ids[same], return_index=True)
+    statuses[rows[same][first]] = 'ok'
     return statuses
 
 
