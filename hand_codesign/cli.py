@@ -64,6 +64,11 @@ def add_run_arguments(parser):
     parser.add_argument('--live-host', default='127.0.0.1', metavar='HOST',
                         help='address the live view serves on (default 127.0.0.1: this host '
                              'only)')
+    parser.add_argument('--write-key-file', action='append', default=[], metavar='ID=PATH',
+                        help='write the key of evaluator ID to PATH (mode 0600, outside the bag) '
+                             'for an evaluator on another host: -p key_file:=PATH')
+    parser.add_argument('--audit-fraction', type=float,
+                        help='share of answers a second evaluator checks (default 0.1; 0: none)')
     add_rig_arguments(parser)
 
 

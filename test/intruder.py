@@ -1,10 +1,13 @@
 """
-Disturb a run: publish a foreign run and malformed candidates into the run's ROS domain.
+Disturb a run as a process without a key on the run's ROS domain would.
 
 Started by test_system.py before the run; waits for the run's RunInfo, then publishes a
-RunInfo and a Candidate of a foreign run, a Candidate of the run with a genome of the wrong
-length, one with NaN values, one of an impossible structure, and an Evaluation of the foreign
-run; it leaves once the malformed candidates are answered.
+RunInfo and a Candidate of a foreign run, an unsigned RunInfo of the run itself announcing
+another task, unsigned Candidates of the run (a genome of the wrong length, NaN values, an
+impossible structure) addressed to the run's evaluators, and an Evaluation of the foreign run.
+Then it forges: it answers every Candidate at once with objectives of 0 in the name of the
+evaluator the optimizer addressed, until the run's final GenerationSummary. It prints how
+many evaluations it forged.
 """
 
 import sys
@@ -13,51 +16,65 @@ import time
 from hand_codesign.ros import topics
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
+from hand_codesign_msgs.msg import GenerationSummary
 from hand_codesign_msgs.msg import RunInfo
 import rclpy
+
+MALFORMED = {10**9: ([0.5], [2, 2]), 10**9 + 1: ([float('nan')] * 24, [2, 2]),
+             10**9 + 2: ([0.5] * 24, [0, 7])}
 
 
 def main():
     rclpy.init()
     node = rclpy.create_node('intruder')
-    runs = []
+    runs, finals = [], []
     node.create_subscription(RunInfo, topics.RUN_INFO, runs.append, topics.QOS[topics.RUN_INFO])
-    answered = set()
-    node.create_subscription(Evaluation, topics.EVALUATIONS,
-                             lambda message: answered.add(message.candidate_id),
-                             topics.QOS[topics.EVALUATIONS])
+    node.create_subscription(GenerationSummary, topics.GENERATION_SUMMARY,
+                             lambda message: message.final and finals.append(message),
+                             topics.QOS[topics.GENERATION_SUMMARY])
     publishers = {name: node.create_publisher(topics.MESSAGE_TYPES[name], name,
                                               topics.QOS[name])
                   for name in (topics.RUN_INFO, topics.CANDIDATES, topics.EVALUATIONS)}
+    forged = []
+
+    def forge(candidate):
+        if runs and candidate.run_id == runs[0].run_id and candidate.candidate_id < 10**9:
+            forged.append(candidate.candidate_id)
+            publishers[topics.EVALUATIONS].publish(Evaluation(
+                run_id=candidate.run_id, generation=candidate.generation,
+                candidate_id=candidate.candidate_id, attempt=candidate.attempt,
+                evaluator_id=candidate.evaluator_id, status=Evaluation.STATUS_OK,
+                objectives=[0.0] * len(runs[0].objective_names),
+                objective_names=list(runs[0].objective_names), signature=[0] * 32))
+
+    node.create_subscription(Candidate, topics.CANDIDATES, forge, topics.QOS[topics.CANDIDATES])
     deadline = time.monotonic() + 90
     while not runs and time.monotonic() < deadline:
         rclpy.spin_once(node, timeout_sec=0.1)
     if not runs:
         print('no RunInfo seen', file=sys.stderr)
         return 1
-    run_id = runs[0].run_id
-    size = len(runs[0].objective_names)
+    run = runs[0]
     publishers[topics.RUN_INFO].publish(RunInfo(run_id='foreign-run', task_yaml='not: a task'))
+    publishers[topics.RUN_INFO].publish(RunInfo(
+        run_id=run.run_id, task_name=run.task_name, task_yaml='not: the run task',
+        seed=run.seed, objective_names=run.objective_names))
     publishers[topics.CANDIDATES].publish(Candidate(
         run_id='foreign-run', candidate_id=0, genome=[0.5] * 10, structure=[2, 2]))
-    publishers[topics.CANDIDATES].publish(Candidate(
-        run_id=run_id, candidate_id=10**9, genome=[0.5], structure=[2, 2]))
-    publishers[topics.CANDIDATES].publish(Candidate(
-        run_id=run_id, candidate_id=10**9 + 1, genome=[float('nan')] * 24, structure=[2, 2]))
-    publishers[topics.CANDIDATES].publish(Candidate(
-        run_id=run_id, candidate_id=10**9 + 2, genome=[0.5] * 24, structure=[0, 7]))
+    for evaluator_id in ('', 'evaluator-0', 'evaluator-1'):
+        for candidate_id, (genome, structure) in MALFORMED.items():
+            publishers[topics.CANDIDATES].publish(Candidate(
+                run_id=run.run_id, candidate_id=candidate_id, genome=genome,
+                structure=structure, evaluator_id=evaluator_id))
     publishers[topics.EVALUATIONS].publish(Evaluation(
-        run_id='foreign-run', candidate_id=0, objectives=[0.0] * size, evaluator_id='intruder'))
-    for publisher in publishers.values():
-        publisher.wait_for_all_acked()
-    # stay until an evaluator has answered each malformed candidate of the run
-    malformed = {10**9, 10**9 + 1, 10**9 + 2}
-    deadline = time.monotonic() + 60
-    while malformed - answered and time.monotonic() < deadline:
+        run_id='foreign-run', candidate_id=0, objectives=[0.0], evaluator_id='intruder'))
+    deadline = time.monotonic() + 180
+    while not finals and time.monotonic() < deadline:
         rclpy.spin_once(node, timeout_sec=0.1)
+    print(f'forged {len(forged)} evaluations')
     node.destroy_node()
     rclpy.try_shutdown()
-    return 0
+    return 0 if finals else 1
 
 
 if __name__ == '__main__':

@@ -65,3 +65,19 @@ def test_a_missing_verb_is_an_argparse_error():
     process = subprocess.run([sys.executable, '-m', 'hand_codesign.cli'], capture_output=True,
                              text=True)
     assert process.returncode == 2 and 'VERB' in process.stderr
+
+
+def test_key_files_go_outside_the_bag_and_never_over_another_file(capsys, tmp_path):
+    bag = tmp_path / 'bag'
+    code, _, err = run(capsys, 'run', '--task', TASK, '--bag', bag, '--write-key-file',
+                       f'host-b={bag / "host-b.key"}')
+    assert code == 2 and 'is inside the bag folder, which must hold nothing secret' in err
+    (tmp_path / 'old.key').write_text('x')
+    code, _, err = run(capsys, 'run', '--task', TASK, '--bag', bag, '--write-key-file',
+                       f'host-b={tmp_path / "old.key"}')
+    assert code == 2 and 'old.key already exists' in err
+    code, _, err = run(capsys, 'run', '--task', TASK, '--bag', bag, '--write-key-file', 'x')
+    assert code == 2 and '--write-key-file x: expected ID=PATH' in err
+    code, _, err = run(capsys, 'run', '--task', TASK, '--bag', bag, '--audit-fraction', '2')
+    assert code == 2 and '--audit-fraction: expected a share from 0 to 1, got 2.0' in err
+    assert not bag.exists()

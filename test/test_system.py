@@ -4,9 +4,11 @@ The whole system as a user runs it: `hand-codesign run` with real processes over
 Each run uses its own ROS domain. The runs are small (Task 5, a few candidates and worlds)
 so that the properties are shown in seconds: bit-identical summaries with 1 and 3
 evaluators, a run that survives an evaluator killed with SIGKILL, a bag holding every
-message, and a run undisturbed by messages of a foreign run and malformed ones.
+message, a run undisturbed by a forger without a key (and whose keys stay out of command
+lines, bag and logs), and a lying evaluator with a key caught by an audit.
 """
 
+import contextlib
 import json
 import os
 import pathlib
@@ -17,6 +19,9 @@ import threading
 import time
 
 from hand_codesign.analysis.bag import read_run
+from hand_codesign.analysis.trust import trust_counts
+from hand_codesign.core.signing import new_secret
+from hand_codesign.core.signing import RunKeys
 from hand_codesign.ros.runner import claimed_domain
 import numpy as np
 import psutil
@@ -158,25 +163,144 @@ def test_killed_evaluator_does_not_change_the_result(one_evaluator_run, tmp_path
     assert summaries(killed) == summaries(bag)
 
 
-def test_foreign_and_malformed_messages_do_not_disturb_a_run(one_evaluator_run, tmp_path):
+def run_processes(runner):
+    return [child for child in psutil.Process(runner.pid).children(recursive=True)
+            if 'hand_codesign' in ' '.join(child.cmdline())]
+
+
+def secrets_of(runner, deadline):
+    """Return the run secret and evaluator keys as the same user can read them (environ)."""
+    found = set()
+    while len(found) < 3:
+        assert runner.poll() is None, runner.stdout.read()
+        assert time.monotonic() < deadline, 'no keys found in the environments of the run'
+        for child in run_processes(runner):
+            with contextlib.suppress(psutil.Error):
+                environment = child.environ()
+                if 'HAND_CODESIGN_RUN_SECRET' in environment:
+                    found.add(environment['HAND_CODESIGN_RUN_SECRET'])
+                if 'HAND_CODESIGN_EVALUATOR_KEY' in environment:
+                    found.add(json.loads(environment['HAND_CODESIGN_EVALUATOR_KEY'])['key'])
+        time.sleep(0.05)
+    return found
+
+
+def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run, tmp_path):
     bag, _ = one_evaluator_run
     disturbed = tmp_path / 'disturbed'
-    domain = free_domain()
-    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
-    # the intruder waits for the run's RunInfo and strikes before the first generation
-    intruder = subprocess.Popen([sys.executable, str(ROOT / 'test' / 'intruder.py')], env=env,
-                                stderr=subprocess.PIPE, text=True)
-    finish(start_run(disturbed, 2, domain=domain))
-    assert intruder.wait(timeout=120) == 0, intruder.stderr.read()
+    key_file = tmp_path / 'host-b.key'
+    for _ in range(5):   # another run of this host may claim the free domain first
+        domain = free_domain()
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+        # the intruder waits for the run's RunInfo, then forges an answer to every candidate
+        intruder = subprocess.Popen([sys.executable, str(ROOT / 'test' / 'intruder.py')],
+                                    env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                    text=True)
+        runner = start_run(disturbed, 2, domain=domain,
+                           extra=['--write-key-file', f'host-b={key_file}'])
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            runner.wait(timeout=3)
+        if runner.poll() is None:
+            break
+        intruder.kill()
+        intruder.communicate()
+        assert 'in use by another run' in runner.stdout.read()
+    keys = secrets_of(runner, time.monotonic() + 60)
+    command_lines = {' '.join(process.cmdline()) for process in psutil.process_iter()
+                     if process.pid != os.getpid()}
+    output = finish(runner)
+    forgeries, errors = intruder.communicate(timeout=120)
+    assert intruder.returncode == 0, errors
+    forged = int(forgeries.split()[1])
+    assert forged >= 18, forgeries
     assert summaries(disturbed) == summaries(bag)
-    run_id = json.loads((disturbed / 'result.json').read_text())['run_id']
-    record = read_run(disturbed, run_id=run_id)
+    result = json.loads((disturbed / 'result.json').read_text())
+    trust = result['trust']
+    assert 0 < trust['rejected_evaluations'] <= forged
+    record = read_run(disturbed, run_id=result['run_id'])
     assert 'foreign-run' in record.run_ids
-    rejected = record.evaluations.select(record.evaluations['status'] == 1)
-    reasons = ' '.join(rejected['reason'])
-    assert 'genome has 1 values' in reasons
-    assert 'NaN' in reasons
-    assert 'structure' in reasons
+    ignored = trust_counts(record)['rejected_by_evaluators']
+    assert ignored >= 2 * 3 + 2, 'the unsigned candidates and RunInfo were not all ignored'
+    answered = set(record.evaluations['candidate_id'].tolist())
+    assert not answered & {10**9, 10**9 + 1, 10**9 + 2}, 'an unsigned candidate was answered'
+    # the run secret and the evaluators' keys: in no command line, file of the bag, or output
+    assert len(keys) == 3
+    contents = [path.read_bytes() for path in disturbed.rglob('*') if path.is_file()]
+    contents += [output.encode(), errors.encode()]
+    for key in keys:
+        assert not any(key in line for line in command_lines)
+        assert not any(key.encode() in data or bytes.fromhex(key) in data for data in contents)
+    assert key_file.stat().st_mode & 0o777 == 0o600
+    assert json.loads(key_file.read_text())['evaluator_id'] == 'host-b'
+    assert not any(key in key_file.read_text() for key in keys)
+    report = subprocess.run([sys.executable, '-m', 'hand_codesign.cli', 'analyze',
+                             str(disturbed), '--out', str(tmp_path / 'report')],
+                            capture_output=True, text=True, cwd=ROOT)
+    assert (f'{trust["rejected_evaluations"]} evaluation(s) ignored by the optimizer'
+            in report.stdout), report.stdout + report.stderr
+    assert f'{ignored} RunInfo/Candidate message(s) ignored' in report.stdout
+    # the forgeries are in the bag, but the analysis takes what the optimizer told
+    assert 'untold (answers the summaries contradict)' in report.stdout
+    assert f'fitness {result["fitness"]:.4g}' in report.stdout.split('best design:')[1]
+
+
+def test_an_evaluator_with_its_key_that_lies_is_caught(one_evaluator_run, tmp_path):
+    bag, _ = one_evaluator_run
+    secret = new_secret()
+    keys = RunKeys(secret)
+    key_file = tmp_path / 'liar.key'
+    key_file.write_text(keys.credential('liar').text())
+    with claimed_domain(None) as domain_id:
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain_id))
+        lied = tmp_path / 'lied'
+        processes = []
+
+        def start(module, parameters, key=None, **popen):
+            command = [sys.executable, *module, '--ros-args']
+            for name, value in parameters.items():
+                command += ['-p', f'{name}:={value}']
+            processes.append(subprocess.Popen(command, cwd=ROOT, env=dict(env, **(key or {})),
+                                              **popen))
+            return processes[-1]
+
+        try:
+            recorder = start(['-m', 'hand_codesign.ros.recorder_node'], {'bag_path': lied},
+                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            for line in recorder.stdout:
+                if 'recorder ready' in line:
+                    break
+            threading.Thread(target=recorder.stdout.read, daemon=True).start()
+            for index in range(2):
+                credential = keys.credential(f'evaluator-{index}').text()
+                start(['-m', 'hand_codesign.ros.evaluator_node'],
+                      {'evaluator_id': f'evaluator-{index}', 'subscribers_expected': 2},
+                      {'HAND_CODESIGN_EVALUATOR_KEY': credential}, stdout=subprocess.DEVNULL)
+            start([str(ROOT / 'test' / 'liar.py')],
+                  {'key_file': key_file, 'subscribers_expected': 2, 'capacity': 3},
+                  stdout=subprocess.DEVNULL)
+            optimizer = start(
+                ['-m', 'hand_codesign.commands.optimizer'],
+                {'task_file': TASK, 'seed': 7, 'iterations': 3, 'population': 6,
+                 'world_states': 3, 'evaluators_expected': 3, 'subscribers_expected': 1,
+                 'result_file': lied / 'result.json'},
+                {'HAND_CODESIGN_RUN_SECRET': secret.hex()}, stderr=subprocess.PIPE, text=True)
+            _, log = optimizer.communicate(timeout=180)
+            assert optimizer.returncode == 0, log
+        finally:
+            for process in reversed(processes):
+                if process.poll() is None:
+                    process.send_signal(signal.SIGINT)
+                process.wait(timeout=60)
+    assert summaries(lied) == summaries(bag)
+    result = json.loads((lied / 'result.json').read_text())
+    assert result['trust']['quarantined'] == ['liar'], log
+    assert 'liar returned objectives that others contradict' in log
+    record = read_run(lied)
+    liar_rows = record.evaluations.select(record.evaluations['evaluator_id'] == 'liar')
+    assert len(liar_rows) >= 1
+    assert summaries(lied)[0]['evaluations'] == 6
+    counts = trust_counts(record)
+    assert counts['quarantined'] == ['liar'] and counts['audit_evaluations'] >= 2
 
 
 def test_hierarchy_task_searches_structures_bottom_up(tmp_path):

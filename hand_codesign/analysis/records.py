@@ -8,14 +8,16 @@ work on the RunRecord it returns:
 - `run_task_of(record, structure, world_states)`: the Task of the run (as every process of the
   run rebuilt it, `core.runs.run_task`), for one structure of a hierarchy if asked;
 - `evaluation_rows(record)`: every Evaluation joined with its Candidate (genome, structure),
-  with a status of 'ok', 'rejected' or 'duplicate' (a later answer for an already evaluated
-  candidate, which the optimizer ignored);
+  with a status of 'ok', 'rejected', 'duplicate' (a later answer for an already evaluated
+  candidate, which the optimizer ignored, or an audit's) or 'untold' (an answer that differs
+  from what the summaries say was told: a forgery the optimizer ignored, or a liar's);
 - `recorded_design(record, candidate_id)`: one recorded candidate with its recorded result;
 - `best_candidate_id(record)` and `ranked_candidate_id(record, generation, rank)`: which design
   a verb works on by default and on request.
 """
 
 import dataclasses
+import json
 import pathlib
 import sys
 
@@ -38,10 +40,27 @@ def beside_bag(bag_path, suffix):
     return path.parent / f'{stem}{suffix}'
 
 
-def open_run(path, warn=True):
-    """Return the RunRecord of the bag at path; raise UserError for an unreadable bag."""
+def result_run_id(path):
+    """
+    Return the run id of the result.json in a bag folder, or None.
+
+    The optimizer of the run wrote it; anything on the run's domain can put a RunInfo of
+    another run into the bag, and the bag holds no key to tell which is the run's own.
+    """
+    result = pathlib.Path(path) / 'result.json'
     try:
-        record = read_run(path)
+        return json.loads(result.read_text()).get('run_id') if result.is_file() else None
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def open_run(path, warn=True):
+    """Return the RunRecord of the bag at path (its result.json's run, if any); UserError."""
+    try:
+        try:
+            record = read_run(path, run_id=result_run_id(path))
+        except BagError:
+            record = read_run(path)
     except BagError as error:
         raise UserError(str(error)) from None
     if warn:
@@ -128,7 +147,7 @@ class EvaluationRows:
     generation: np.ndarray
     candidate_id: np.ndarray
     evaluator_id: np.ndarray     # object array of str
-    status: np.ndarray           # object array: 'ok', 'rejected' or 'duplicate'
+    status: np.ndarray           # object array: 'ok', 'rejected', 'duplicate' or 'untold'
     reason: np.ndarray           # object array of str
     objectives: np.ndarray       # (rows, objectives), NaN for rejections
     fitness: np.ndarray
@@ -163,6 +182,32 @@ def _statuses(evaluations):
     repeated = np.ones(len(ok_rows), dtype=bool)
     repeated[first] = False
     statuses[ok_rows[repeated]] = 'duplicate'
+    return statuses
+
+
+def _told_statuses(statuses, evaluations, objectives, told):
+    """
+    Return statuses with the summaries' word on what was told.
+
+    For a candidate the summaries hold, the first OK answer equal to the told objectives bit
+    for bit is 'ok', later equal ones 'duplicate', different ones 'untold'.
+    """
+    if not told or not objectives.shape[1]:
+        return statuses
+    told_ids = np.array(sorted(told), dtype=np.uint64)
+    told_values = np.array([told[int(i)] for i in told_ids], dtype=float)
+    rows = np.flatnonzero(np.isin(statuses, ('ok', 'duplicate')))
+    ids = np.asarray(evaluations['candidate_id'], dtype=np.uint64)[rows]
+    position = np.minimum(np.searchsorted(told_ids, ids), len(told_ids) - 1)
+    known = told_ids[position] == ids
+    rows, ids, position = rows[known], ids[known], position[known]
+    same = np.all(objectives[rows].view(np.uint64)
+                  == told_values[position].view(np.uint64), axis=1)   # bit for bit
+    statuses = statuses.copy()
+    statuses[rows[~same]] = 'untold'
+    statuses[rows[same]] = 'duplicate'
+    _, first = np.unique(ids[same], return_index=True)
+    statuses[rows[same][first]] = 'ok'
     return statuses
 
 
@@ -202,14 +247,16 @@ def evaluation_rows(record):
         record.candidates) else (np.array([], dtype=np.uint64), np.array([], dtype=np.int64))
     candidate_row = _lookup(unique, first, evaluations['candidate_id'])
     gene_names, genes = _genes(record.candidates, candidate_row)
+    objectives = _row_matrix(evaluations['objectives'], np.arange(count), len(names))
     return EvaluationRows(
         objective_names=names,
         generation=np.asarray(evaluations['generation'], dtype=np.int64),
         candidate_id=np.asarray(evaluations['candidate_id'], dtype=np.uint64),
         evaluator_id=np.asarray(evaluations['evaluator_id'], dtype=object),
-        status=_statuses(evaluations),
+        status=_told_statuses(_statuses(evaluations), evaluations, objectives,
+                              told_objectives(record)),
         reason=np.asarray(evaluations['reason'], dtype=object),
-        objectives=_row_matrix(evaluations['objectives'], np.arange(count), len(names)),
+        objectives=objectives,
         fitness=np.asarray(evaluations['fitness'], dtype=float),
         collision=np.asarray(evaluations['collision'], dtype=bool),
         unstable_worlds=np.asarray(evaluations['unstable_worlds'], dtype=np.int64),
@@ -257,6 +304,11 @@ def recorded_design(record, candidate_id):
         matches = np.flatnonzero(
             (np.asarray(evaluations['candidate_id'], dtype=np.uint64) == np.uint64(candidate_id))
             & (np.asarray(evaluations['status']) == STATUS_OK))
+        told = told_objectives(record).get(int(candidate_id))
+        if told is not None:  # rather the answer told than a forgery or a liar's
+            same = [row for row in matches if np.asarray(
+                evaluations['objectives'][row], dtype=float).tobytes() == told.tobytes()]
+            matches = same or matches
         if len(matches):
             evaluation = evaluations.row(int(matches[0]))
             objectives = np.asarray(evaluation['objectives'], dtype=float)

@@ -24,6 +24,7 @@ import pathlib
 
 from hand_codesign.analysis import records
 from hand_codesign.analysis.rig_report import rig_comparison
+from hand_codesign.analysis.trust import trust_facts
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.errors import UserError
 import numpy as np
@@ -288,7 +289,10 @@ class Report:
         wall = self.wall_time
         facts += [
             ('evaluations', f'{ok} ok, {int((rows.status == "rejected").sum())} rejected, '
-                            f'{int((rows.status == "duplicate").sum())} duplicate'),
+                            f'{int((rows.status == "duplicate").sum())} duplicate'
+                            + (f', {int((rows.status == "untold").sum())} untold (answers '
+                               'the summaries contradict)' if (rows.status == 'untold').any()
+                               else '')),
             ('generations', f'{len(self.generations)} (from {self.generations.source})'),
             ('wall time', f'{wall:.1f} s'),
             ('evaluations per second', f'{ok / wall:.2f}' if wall > 0 else 'n/a'),
@@ -305,6 +309,7 @@ class Report:
         if summary is not None:
             facts.append(('stopped', 'yes: ' + (summary['stop_reason'] or 'final')
                           if summary['final'] else 'no final summary (run interrupted?)'))
+        facts += trust_facts(record)
         if record.truncated:
             facts.append(('bag state', 'truncated: read up to the cut'))
         return facts

@@ -2,18 +2,22 @@
 `hand-codesign run`: a co-design as separate processes, fresh or resumed from a bag.
 
 This command checks the flags, loads the run's task (from the task file, or for `--resume`
-from the bag through hand_codesign.analysis.resume), lets hand_codesign.ros.runner start and
-stop the processes, and prints where the bag and the best design are.
+from the bag through hand_codesign.analysis.resume), draws the run's secret (core.signing)
+and writes the key files asked for, lets hand_codesign.ros.runner start and stop the
+processes, and prints where the bag and the best design are.
 """
 
 import contextlib
 import json
+import os
 import pathlib
 import signal
 import sys
 import time
 
 from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.signing import new_secret
+from hand_codesign.core.signing import RunKeys
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 from hand_codesign.ros.discovery import DiscoveryServer
@@ -35,13 +39,19 @@ def run_command(arguments):
     if bag.suffix == '.mcap':
         raise UserError(f'--bag {bag}: give a folder (the run writes its bag, result.json and '
                         'logs there), not a .mcap file')
+    key_files = key_file_requests(arguments.write_key_file, bag)
+    keys = RunKeys(new_secret())
     discovery = (DiscoveryServer(arguments.discovery_server)
                  if arguments.discovery_server is not None else None)
     with claimed_domain(arguments.domain_id) as domain_id:
         live = None if arguments.live is None else (arguments.live_host, arguments.live)
         system = System(bag, domain_id, quiet=arguments.quiet, discovery=discovery,
-                        start_timeout=start_timeout(arguments), live=live)
+                        start_timeout=start_timeout(arguments), live=live, keys=keys)
         say = system.say
+        for evaluator_id, path in key_files:
+            write_key_file(path, keys.credential(evaluator_id).text())
+            say(f'key of evaluator {evaluator_id}: {path} (start it with ROS_DOMAIN_ID='
+                f'{domain_id} and -p key_file:={path})')
         source = arguments.task or f'resumed from {arguments.resume}'
         say(f'run: task {task.name} ({source}), evaluators: {arguments.evaluators}, '
             f'ROS_DOMAIN_ID={domain_id}, bag {bag}')
@@ -72,12 +82,40 @@ def start_timeout(arguments):
     return DEFAULT_START_TIMEOUT if arguments.evaluators > 0 else 0.0
 
 
+def key_file_requests(requests, bag):
+    """Return [(evaluator id, path)] of --write-key-file ID=PATH; UserError if unusable."""
+    chosen = []
+    for request in requests:
+        evaluator_id, _, path = request.partition('=')
+        if not evaluator_id or not path:
+            raise UserError(f'--write-key-file {request}: expected ID=PATH, e.g. '
+                            'host-b=/home/me/host-b.key')
+        path = pathlib.Path(path).resolve()
+        if path == bag or bag in path.parents:
+            raise UserError(f'--write-key-file {request}: {path} is inside the bag folder, '
+                            'which must hold nothing secret; choose a path outside it')
+        if path.exists():
+            raise UserError(f'--write-key-file {request}: {path} already exists; keys of an '
+                            'earlier run do not fit this one, choose a new path')
+        chosen.append((evaluator_id, path))
+    return chosen
+
+
+def write_key_file(path, text):
+    """Write a key file that only its owner can read (created with mode 0600)."""
+    descriptor = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    with os.fdopen(descriptor, 'w') as stream:
+        stream.write(text + '\n')
+
+
 def optimizer_parameters(arguments, task, bag):
     """Return the optimizer node's parameters for this run."""
     parameters = {
         'evaluators_expected': max(1, arguments.evaluators + bool(arguments.rig)),
         'subscribers_expected': 1,
         'result_file': bag / 'result.json'}
+    if getattr(arguments, 'audit_fraction', None) is not None:
+        parameters['audit_fraction'] = arguments.audit_fraction
     if arguments.resume:
         parameters['resume_bag'] = pathlib.Path(arguments.resume).resolve()
     else:
@@ -128,6 +166,9 @@ def check_arguments(arguments):
     if arguments.discovery_server is not None and not 0 < arguments.discovery_server < 65536:
         raise UserError(f'--discovery-server: expected a UDP port from 1 to 65535, got '
                         f'{arguments.discovery_server}')
+    fraction = getattr(arguments, 'audit_fraction', None)
+    if fraction is not None and not 0.0 <= fraction <= 1.0:
+        raise UserError(f'--audit-fraction: expected a share from 0 to 1, got {fraction}')
     for flag in ('iterations', 'popsize', 'world_states'):
         value = getattr(arguments, flag)
         if value is not None and value < 1:

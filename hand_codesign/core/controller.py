@@ -23,7 +23,10 @@ with a fake one. Rules the controller adds to the Dispatcher's:
 - with `evaluation_timeout` 0 the deadline adapts: 20 times the slowest of the last 50
   evaluations, at least 60 s (3600 s until the first one comes back);
 - a resumed run (core.resume.ResumePoint) starts from the rebuilt search and does not send the
-  candidates whose objectives its record already holds.
+  candidates whose objectives its record already holds;
+- an answer is taken only as core.audits decides: some go to a second evaluator first, a
+  mismatch to a third, and a liar is quarantined (its untold answers are evaluated again).
+  Audits are cost, not progress: neither the evaluations told nor the rate count them.
 """
 
 import collections
@@ -31,6 +34,8 @@ import json
 import os
 import time
 
+from hand_codesign.core.audits import Audits
+from hand_codesign.core.audits import DEFAULT_FRACTION
 from hand_codesign.core.contract import EVALUATORS_READY
 from hand_codesign.core.dispatch import Dispatcher
 from hand_codesign.core.genome import genome_spec
@@ -46,6 +51,8 @@ FIRST_EVALUATION_TIMEOUT = 3600.0
 ADAPTIVE_FACTOR = 20.0
 ADAPTIVE_MINIMUM = 60.0
 ADAPTIVE_WINDOW = 50
+# a candidate may go to its first evaluator, an auditor, a third, and again after a quarantine
+MAX_ATTEMPTS = 8
 
 
 def default_run_id(task):
@@ -57,7 +64,8 @@ class RunController:
     """Drive a run's search over evaluators, one batch at a time (see the module doc)."""
 
     def __init__(self, task, run_id, outbox, resumed=None, heartbeat_timeout=5.0,
-                 evaluation_timeout=0.0, evaluators_expected=1, clock=time.monotonic):
+                 evaluation_timeout=0.0, evaluators_expected=1, clock=time.monotonic,
+                 audit_fraction=DEFAULT_FRACTION):
         self.task = task
         self.run_id = run_id
         self.outbox = outbox
@@ -67,7 +75,11 @@ class RunController:
         self.evaluators_expected = evaluators_expected
         self.clock = clock
         self.dispatcher = Dispatcher(heartbeat_timeout,
-                                     evaluation_timeout or FIRST_EVALUATION_TIMEOUT)
+                                     evaluation_timeout or FIRST_EVALUATION_TIMEOUT,
+                                     MAX_ATTEMPTS)
+        self.audits = Audits(task.seed, audit_fraction)
+        self.rejected_evaluations = 0  # Evaluations whose signature failed
+        self.attempts = {}             # candidate id -> dispatches so far
         self.adaptive_timeout = evaluation_timeout <= 0
         self.wall_times = collections.deque(maxlen=ADAPTIVE_WINDOW)
         self.batch = None
@@ -106,11 +118,44 @@ class RunController:
             self.advance()
 
     def evaluated(self, run_id, candidate_id, evaluator_id, objectives, wall_time):
-        """Take an evaluation; the first answer for a candidate wins, later ones are ignored."""
-        if self.ours(run_id) and self.dispatcher.complete(candidate_id):
-            self.results[candidate_id] = np.array(objectives, dtype=float)
-            self.wall_times.append(wall_time)
-            self.advance()
+        """Take an evaluation: the first answer, or an audit's, per core.audits' rules."""
+        if (not self.ours(run_id) or evaluator_id in self.audits.quarantined
+                or self.audits.answered(candidate_id, evaluator_id)
+                or not self.dispatcher.complete(candidate_id)):
+            return
+        self.wall_times.append(wall_time)
+        others = set(self.dispatcher.live_evaluators(self.clock())) - {evaluator_id}
+        verdict = self.audits.take(candidate_id, evaluator_id, objectives, bool(others))
+        if verdict.value is not None:
+            self.results[candidate_id] = verdict.value
+        elif verdict.exclude:
+            self._send_again(candidate_id, verdict.exclude)
+            if len(verdict.exclude) > 1:
+                self.outbox.log(f'candidate {candidate_id}: {", ".join(sorted(verdict.exclude))}'
+                                ' disagree; asking another evaluator', 'warning')
+        for liar in verdict.liars:
+            self.dispatcher.quarantine(liar)
+            self.outbox.log(f'evaluator {liar} returned objectives that others contradict: '
+                            'quarantined, its answers are evaluated again', 'warning')
+        self.results.update(verdict.released)
+        for redone in verdict.redo:
+            self.results.pop(redone, None)
+            self._send_again(redone, ())
+        self.advance()
+
+    def _send_again(self, candidate_id, exclude):
+        candidate = next(c for c in self.batch if c.candidate_id == candidate_id)
+        self.dispatcher.add_again(candidate, self.attempts.get(candidate_id, 0), exclude)
+
+    def forged(self, run_id, evaluator_id):
+        """Count an Evaluation of this run whose signature failed; it is otherwise ignored."""
+        if not self.ours(run_id):
+            return
+        self.rejected_evaluations += 1
+        if self.rejected_evaluations in (1, 10, 100, 1000):
+            self.outbox.log(f'{self.rejected_evaluations} evaluation(s) with a missing or '
+                            f'wrong signature ignored (latest claims to be {evaluator_id!r})',
+                            'warning')
 
     def rejected(self, run_id, candidate_id, evaluator_id, reason):
         """Take a rejection: the candidate goes to an evaluator that has not refused it."""
@@ -141,14 +186,16 @@ class RunController:
                     ADAPTIVE_MINIMUM, ADAPTIVE_FACTOR * max(self.wall_times))
             world_states = self.search.batch_task.num_world_states if self.search.checking else 0
             for candidate, evaluator_id, attempt in self.dispatcher.assignments(self.clock()):
+                self.attempts[candidate.candidate_id] = attempt + 1
                 self.outbox.send_candidate(candidate, evaluator_id, attempt, self.genome_names,
                                            world_states, self._physical(candidate))
-            if self.dispatcher.unfinished:
+            if self.dispatcher.unfinished or self.audits.holding:
                 return
             self._tell_batch()
 
     def _start_batch(self):
         self.batch = self.search.ask()
+        self.audits.start_batch()
         self.genome_names = genome_spec(self.search.batch_task).names
         self.physical = {}
         # a resumed run's first batch may be partly evaluated already (in its record)
@@ -181,6 +228,7 @@ class RunController:
             generation, structure, self.task.objective_names, told_ids, objectives,
             optimizer.result, self.told, elapsed, checking, horizon)
         summary['best_design'] = self.best_design(structure, optimizer.result.x)
+        summary.update(self.trust_counts(), audited_ids=sorted(self.audits.audited))
         self.outbox.send_summary(summary)
         if checking:
             self.outbox.log(
@@ -192,7 +240,17 @@ class RunController:
         done = optimizer.generation
         left = elapsed / done * (self.task.iterations - done)
         rate = self.told / max(elapsed, 1e-9)  # a fake clock may not have moved
-        self.outbox.log(progress_line(summary, self.task.iterations, rate, left))
+        line = progress_line(summary, self.task.iterations, rate, left)
+        if self.audits.audit_evaluations:
+            line += f' | {self.audits.audit_evaluations} audit evaluations'
+        self.outbox.log(line)
+
+    def trust_counts(self):
+        """Return the run's counts of forged answers, audits and quarantines so far."""
+        return {'rejected_evaluations': self.rejected_evaluations,
+                'audit_evaluations': self.audits.audit_evaluations,
+                'reevaluations': self.audits.reevaluations,
+                'quarantined': list(self.audits.quarantined)}
 
     def _finish(self):
         self.finished = True
@@ -208,7 +266,8 @@ class RunController:
             told_objectives=np.zeros((0, len(names))), wall_time=self.clock() - self.started,
             structure=structure, best_id=result.candidate_id,
             best_objectives=result.objectives, best_fitness=result.fitness,
-            best_x=result.x, best_design=self.best_design(structure, result.x)))
+            best_x=result.x, best_design=self.best_design(structure, result.x),
+            audited_ids=[], **self.trust_counts()))
         self.outbox.log(f'run {self.run_id} finished ({stop_reason})')
         self.outbox.finish(self._result(result, structure, stop_reason))
 
@@ -221,7 +280,7 @@ class RunController:
         return {
             'run_id': self.run_id, 'task': self.task.name, 'seed': self.task.seed,
             'stop_reason': stop_reason, 'evaluations': self.told,
-            'structure': list(structure),
+            'structure': list(structure), 'trust': self.trust_counts(),
             'best_candidate_id': result.candidate_id, 'generation': result.generation,
             'horizon': self.search.horizon_of(result.generation),
             'fitness': result.fitness,

@@ -13,7 +13,10 @@ Rules:
 - a candidate unanswered after `evaluation_timeout` is sent again to another evaluator; the
   first answer wins, later ones are ignored as duplicates;
 - a rejected candidate is sent to an evaluator that has not rejected it, and after
-  `max_attempts` dispatches the dispatcher gives up with DispatchError.
+  `max_attempts` dispatches the dispatcher gives up with DispatchError;
+- a candidate added again (`add_again`, an audit) goes to an evaluator other than those
+  named, with the next attempt number;
+- a quarantined evaluator gets nothing more, and its heartbeats are ignored.
 """
 
 from collections import deque
@@ -49,9 +52,12 @@ class Dispatcher:
         self.evaluators = {}
         self._pending = {}
         self._queue = deque()
+        self.quarantined = set()
 
     def heard_from(self, evaluator_id, capacity, now):
         """Record a heartbeat of an evaluator announcing how many candidates it takes."""
+        if evaluator_id in self.quarantined:
+            return
         state = self.evaluators.get(evaluator_id)
         if state is None:
             self.evaluators[evaluator_id] = EvaluatorState(max(1, capacity), now)
@@ -64,6 +70,23 @@ class Dispatcher:
         for candidate in candidates:
             self._pending[candidate.candidate_id] = PendingCandidate(candidate)
             self._queue.append(candidate.candidate_id)
+
+    def add_again(self, candidate, attempts, exclude=()):
+        """Queue a candidate once more, for an evaluator not in exclude, as attempt `attempts`."""
+        self._pending[candidate.candidate_id] = PendingCandidate(
+            candidate, attempts, set(exclude))
+        self._queue.append(candidate.candidate_id)
+
+    def quarantine(self, evaluator_id):
+        """Send nothing more to an evaluator; what it holds goes back to the queue."""
+        self.quarantined.add(evaluator_id)
+        state = self.evaluators.pop(evaluator_id, None)
+        if state is not None:
+            for candidate_id in sorted(state.assigned, reverse=True):
+                elsewhere = any(candidate_id in other.assigned
+                                for other in self.evaluators.values())
+                if candidate_id in self._pending and not elsewhere:
+                    self._queue.appendleft(candidate_id)
 
     @property
     def unfinished(self):

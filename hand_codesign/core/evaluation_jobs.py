@@ -12,6 +12,9 @@ Whatever a Candidate carries that changes an evaluation is read there and nowher
 (or to any), of the run it serves (or of any run), each (run, candidate, attempt) once; a
 candidate that overtook its run's RunInfo (another topic) waits for it, at most
 `run_info_wait` seconds, after which it is taken to be rejected for the missing RunInfo.
+An inbox given a core.signing.Credential takes only RunInfos and Candidates whose signatures
+hold (a candidate's covers its run's RunInfo, so it waits for that) and counts the others in
+`rejected`; without one (an unsigned run) it takes every message.
 """
 
 import dataclasses
@@ -20,6 +23,7 @@ from typing import Optional, Sequence
 
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.runs import run_task
+from hand_codesign.core.signing import run_digest
 import numpy as np
 
 RUN_INFO_WAIT = 10.0
@@ -77,8 +81,11 @@ class EvaluatorInbox:
     """The runs an evaluator knows and the candidates it takes (see the module doc)."""
 
     def __init__(self, evaluator_id, wanted_run='', run_info_wait=RUN_INFO_WAIT,
-                 clock=time.monotonic):
+                 clock=time.monotonic, credential=None):
         self.evaluator_id = evaluator_id
+        self.credential = credential
+        self.rejected = 0   # RunInfos and Candidates ignored: signature missing or wrong
+        self._digests = {}  # run id -> SHA-256 of its RunInfo, which candidates' signatures cover
         self.wanted_run = wanted_run
         self.run_info_wait = run_info_wait
         self.clock = clock
@@ -94,8 +101,29 @@ class EvaluatorInbox:
         """Take a RunInfo; return the candidates that were waiting for it."""
         if not self._serves(run.run_id):
             return []
+        if self.credential is not None:
+            if not self.credential.run_info_valid(run):
+                self.rejected += 1
+                return []
+            if run.run_id in self.runs:  # the first signed RunInfo of a run stays
+                self.rejected += run_digest(run) != self._digests[run.run_id]
+                return []
+            self._digests[run.run_id] = run_digest(run)
         self.runs[run.run_id] = run
-        return [candidate for candidate, _ in self._waiting.pop(run.run_id, [])]
+        return [candidate for candidate, _ in self._waiting.pop(run.run_id, [])
+                if self._take(candidate)]
+
+    def _take(self, candidate):
+        """Return whether a candidate of a known run is signed (if need be) and new."""
+        if self.credential is not None and not self.credential.candidate_valid(
+                candidate, self._digests[candidate.run_id]):
+            self.rejected += 1
+            return False
+        key = (candidate.run_id, candidate.candidate_id, candidate.attempt)
+        if key in self._seen:
+            return False
+        self._seen.add(key)
+        return True
 
     def candidate_arrived(self, candidate):
         """Return [candidate] if it is to be evaluated now, [] if not ours, seen or waiting."""
@@ -103,12 +131,8 @@ class EvaluatorInbox:
             return []
         if not self._serves(candidate.run_id):
             return []
-        key = (candidate.run_id, candidate.candidate_id, candidate.attempt)
-        if key in self._seen:
-            return []
-        self._seen.add(key)
         if candidate.run_id in self.runs:
-            return [candidate]
+            return [candidate] if self._take(candidate) else []
         # a candidate can overtake its run's RunInfo, which travels on another topic
         self._waiting.setdefault(candidate.run_id, []).append((candidate, self.clock()))
         return []
@@ -120,6 +144,9 @@ class EvaluatorInbox:
         for run_id, waiting in list(self._waiting.items()):
             if now - waiting[0][1] > self.run_info_wait:
                 late += [candidate for candidate, _ in self._waiting.pop(run_id)]
+        if self.credential is not None:  # without their RunInfo, no signature can hold
+            self.rejected += len(late)
+            return []
         return late
 
     def job(self, candidate):

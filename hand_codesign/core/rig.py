@@ -298,8 +298,8 @@ class RigEvaluator:
     ('evaluated', candidate, Evaluation, wall seconds) or ('rejected', candidate, reason).
     """
 
-    def __init__(self, evaluator_id, wanted_run='', **limits):
-        self.inbox = EvaluatorInbox(evaluator_id, wanted_run)
+    def __init__(self, evaluator_id, wanted_run='', credential=None, **limits):
+        self.inbox = EvaluatorInbox(evaluator_id, wanted_run, credential=credential)
         self.limits = limits  # start_timeout, end_margin, max_gap, settle of RigTrials
         self.queue = collections.deque()
         self.current = None  # (candidate, RigTrials, started at)

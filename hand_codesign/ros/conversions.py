@@ -92,7 +92,12 @@ def summary_message(run_id, summary):
         best_fitness=float(summary['best_fitness']), best_genome=float_list(summary['best_x']),
         told_ids=summary['told_ids'], told_objectives=float_list(summary['told_objectives']),
         evaluations=int(summary['evaluations']), wall_time=float(summary['wall_time']),
-        final=bool(summary['final']), stop_reason=summary['stop_reason'])
+        final=bool(summary['final']), stop_reason=summary['stop_reason'],
+        rejected_evaluations=int(summary.get('rejected_evaluations', 0)),
+        audit_evaluations=int(summary.get('audit_evaluations', 0)),
+        audited_ids=[int(i) for i in summary.get('audited_ids', ())],
+        quarantined=list(summary.get('quarantined', ())),
+        reevaluations=int(summary.get('reevaluations', 0)))
 
 
 def shape_marker(shape, number, stamp, frame_id=WORLD_FRAME):

@@ -1,11 +1,11 @@
 """
 The evaluator node: evaluates candidates with hand_codesign.core.evaluate and answers them.
 
-Which candidates it takes and what it evaluates for each are core.evaluation_jobs' rules; the
-node learns runs from the latched RunInfo, hands candidates to its EvaluatorInbox and
-publishes an Evaluation for each, or a rejection with the reason, never a crash. The work runs
-in a callback group of its own under a MultiThreadedExecutor, so that heartbeats go on while
-PyBullet runs. A hardware evaluator would replace `evaluate` and keep everything else.
+Which candidates it takes and what it evaluates are core.evaluation_jobs' rules; the node
+learns runs from the latched RunInfo and answers each candidate taken with an Evaluation or a
+rejection with the reason, never a crash; with a key (ros.keys) it takes only signed messages
+and signs its answers. The work runs in a callback group of its own under a
+MultiThreadedExecutor, so that heartbeats go on while PyBullet runs.
 """
 
 import collections
@@ -17,10 +17,13 @@ import time
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.evaluation_jobs import CandidateRejected
 from hand_codesign.core.evaluation_jobs import EvaluatorInbox
+from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import evaluation_message
 from hand_codesign.ros.conversions import rejection_message
 from hand_codesign.ros.conversions import stamp_now
+from hand_codesign.ros.keys import evaluator_credential
+from hand_codesign.ros.keys import sign_evaluation
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import EvaluatorStatus
 import rclpy
@@ -33,11 +36,11 @@ from rclpy.node import Node
 # name: (default, description, (lowest, highest) or None)
 PARAMETERS = {
     'evaluator_id': ('', 'unique name of this evaluator; empty: <host>-<pid>', None),
+    'key_file': ('', 'key file (`hand-codesign run --write-key-file`); empty: none', None),
     'run_id': ('', 'serve only this run; empty: every run it hears of', None),
     'capacity': (2, 'candidates it asks to have queued at once', (1, 1000)),
     'heartbeat_period': (0.5, 'seconds between status messages', (0.01, 60.0)),
-    'subscribers_expected': (1, 'subscriptions to its evaluations (optimizer, recorders) to '
-                                'wait for before it announces itself', (0, 100)),
+    'subscribers_expected': (1, 'evaluation subscribers to wait for before announcing', (0, 100)),
 }
 
 
@@ -47,12 +50,11 @@ class EvaluatorNode(Node):
     def __init__(self):
         super().__init__('evaluator')
         self.settings = declare_read_only(self, PARAMETERS)
-        self.evaluator_id = (self.settings['evaluator_id']
-                             or f'{socket.gethostname()}-{os.getpid()}')
-        self.inbox = EvaluatorInbox(self.evaluator_id, self.settings['run_id'])
+        self.key, self.evaluator_id = evaluator_credential(self.settings)
+        self.inbox = EvaluatorInbox(self.evaluator_id, self.settings['run_id'],
+                                    credential=self.key)
         self.work = collections.deque()  # candidates taken; the first is being evaluated
-        self.done = 0
-        self.steps_per_second = 0.0
+        self.done, self.steps_per_second = 0, 0.0
         self.evaluations, self.status = (self.create_publisher(
             topics.MESSAGE_TYPES[name], name, topics.QOS[name])
             for name in (topics.EVALUATIONS, topics.EVALUATOR_STATUS))
@@ -86,7 +88,7 @@ class EvaluatorNode(Node):
             answer = self.answer(message)
             if not self.context.ok():
                 return
-            self.evaluations.publish(answer)
+            self.evaluations.publish(sign_evaluation(self.key, answer))
             self.work.popleft()
             self.done += 1
             self.publish_status()
@@ -104,21 +106,19 @@ class EvaluatorNode(Node):
             answer = rejection_message(message, self.evaluator_id,
                                        f'evaluation failed: {type(error).__name__}: {error}')
         answer.wall_time = time.perf_counter() - started
-        if answer.simulated_time > 0:
-            steps = answer.simulated_time / job.task.time_step
-            self.steps_per_second = steps / max(answer.wall_time, 1e-9)
+        if answer.simulated_time > 0:  # physics steps per wall second
+            self.steps_per_second = answer.simulated_time / job.task.time_step / answer.wall_time
         return answer
 
     def publish_status(self):
-        # Announcing itself only once every expected subscriber (the optimizer and the
-        # recorder) has matched its evaluations makes sure the bag gets all of them, even
-        # those of an evaluator killed right after its first answer.
+        # Announcing itself once every expected subscriber (the optimizer and the recorder) has
+        # matched makes the bag get all its evaluations, even if it is killed after the first.
         if self.evaluations.get_subscription_count() < self.settings['subscribers_expected']:
             return
         self.status.publish(EvaluatorStatus(
             evaluator_id=self.evaluator_id, run_id=self.settings['run_id'],
             host=socket.gethostname(), pid=os.getpid(), capacity=self.settings['capacity'],
-            load=len(self.work), evaluations_done=self.done,
+            load=len(self.work), evaluations_done=self.done, rejected_messages=self.inbox.rejected,
             steps_per_second=float(self.steps_per_second), stamp=stamp_now(self)))
 
 
@@ -132,7 +132,7 @@ def main(args=None):
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except ParameterException as error:
+    except (ParameterException, UserError) as error:
         rclpy.logging.get_logger('evaluator').error(str(error))
         return 2
     finally:

@@ -16,11 +16,14 @@ import time
 
 from hand_codesign.core import contract
 from hand_codesign.core.rig import RigEvaluator
+from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import evaluation_message
 from hand_codesign.ros.conversions import rejection_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.conversions import trial_request
+from hand_codesign.ros.keys import evaluator_credential
+from hand_codesign.ros.keys import sign_evaluation
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import EvaluatorStatus
 import rclpy
@@ -31,6 +34,7 @@ from rclpy.node import Node
 # name: (default, description, (lowest, highest) or None)
 PARAMETERS = {
     'evaluator_id': ('', 'unique name of this evaluator; empty: rig-<host>-<pid>', None),
+    'key_file': ('', 'key file (`hand-codesign run --write-key-file`); empty: none', None),
     'run_id': ('', 'serve only this run; empty: every run it hears of', None),
     'heartbeat_period': (0.5, 'seconds between status messages', (0.01, 60.0)),
     'start_timeout': (30.0, 'seconds for the rig to start a requested trial', (0.1, 3600.0)),
@@ -57,9 +61,10 @@ class RigEvaluatorNode(Node):
     def __init__(self):
         super().__init__('rig_evaluator')
         self.settings = declare_read_only(self, PARAMETERS)
-        self.evaluator_id = (self.settings['evaluator_id']
-                             or f'rig-{socket.gethostname()}-{os.getpid()}')
-        self.rig = RigEvaluator(self.evaluator_id, self.settings['run_id'],
+        self.key, self.evaluator_id = evaluator_credential(self.settings)
+        if self.key is None and not self.settings['evaluator_id']:
+            self.evaluator_id = f'rig-{self.evaluator_id}'  # rig-<host>-<pid>
+        self.rig = RigEvaluator(self.evaluator_id, self.settings['run_id'], self.key,
                                 **{name: self.settings[name] for name in LIMITS})
         self.publishers_ = {name: self.create_publisher(
             topics.MESSAGE_TYPES[name], name, topics.QOS[name]) for name in (
@@ -105,7 +110,7 @@ class RigEvaluatorNode(Node):
             else:
                 self.get_logger().warning(f'candidate {candidate.candidate_id}: {action[2]}')
                 answer = rejection_message(candidate, self.evaluator_id, action[2])
-            self.publishers_[contract.EVALUATIONS].publish(answer)
+            self.publishers_[contract.EVALUATIONS].publish(sign_evaluation(self.key, answer))
             self.publish_status()
 
     def publish_status(self):
@@ -126,7 +131,7 @@ def main(args=None):
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except ParameterException as error:
+    except (ParameterException, UserError) as error:
         rclpy.logging.get_logger('rig_evaluator').error(str(error))
         return 2
     finally:

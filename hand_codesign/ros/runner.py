@@ -15,6 +15,12 @@ Evaluators on other hosts can join a run: start them with the run's ROS_DOMAIN_I
 the start) and a discovery range that reaches this host, e.g.
 `ROS_DOMAIN_ID=17 ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET ros2 run hand_codesign evaluator`, or
 through the run's discovery server (ros.discovery) where the network carries no multicast.
+
+Keys (hand_codesign.core.signing): the optimizer gets the run's secret, each evaluator only
+its own Credential, through a variable of the environment the child inherits, never on a
+command line (any user can read command lines in `ps`; /proc/PID/environ only the same user
+and root, like a 0600 file, without a file to leave behind) and never in the bag folder. The
+recorder gets no key, and the nodes remove the variable from their environment once read.
 """
 
 import contextlib
@@ -29,6 +35,8 @@ import time
 from hand_codesign.core.contract import EVALUATORS_READY
 from hand_codesign.core.contract import LIVE_READY
 from hand_codesign.core.contract import RECORDER_READY
+from hand_codesign.core.signing import CREDENTIAL_VARIABLE
+from hand_codesign.core.signing import SECRET_VARIABLE
 from hand_codesign.core.supervision import evaluator_role
 from hand_codesign.core.supervision import node_name
 from hand_codesign.core.supervision import RECORDER
@@ -63,14 +71,17 @@ class System:
     """The processes of one run: recorder, evaluators and optimizer, kept alive while it runs."""
 
     def __init__(self, bag, domain_id, quiet=False, discovery=None, start_timeout=0.0,
-                 live=None):
+                 live=None, keys=None):
         """live: None, or the (host, port) the live view serves Foxglove on."""
         self.bag = bag
         self.live = live
         self.live_view = None
         self.quiet = quiet
+        self.keys = keys  # core.signing.RunKeys, or None for an unsigned run
+        inherited = {name: value for name, value in os.environ.items()
+                     if name not in (SECRET_VARIABLE, CREDENTIAL_VARIABLE)}
         self.environment = dict(
-            os.environ, ROS_DOMAIN_ID=str(domain_id), PYTHONUNBUFFERED='1',
+            inherited, ROS_DOMAIN_ID=str(domain_id), PYTHONUNBUFFERED='1',
             ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE',
                                                          'LOCALHOST'),
             AMENT_PREFIX_PATH=os.environ.get('AMENT_PREFIX_PATH', sys.prefix),
@@ -90,7 +101,7 @@ class System:
         if not self.quiet:
             print(text, flush=True)
 
-    def node(self, module, parameters, remaps=(), **popen):
+    def node(self, module, parameters, key=None, remaps=(), **popen):
         command = [sys.executable, '-m', module, '--ros-args']
         for name, value in parameters.items():
             command += ['-p', f'{name}:={value}']
@@ -98,8 +109,16 @@ class System:
             command += ['-r', remap]
         # a session of its own: the terminal's Ctrl-C reaches only the runner, which then
         # stops the processes in the order that keeps the bag complete
-        return subprocess.Popen(command, env=self.environment, start_new_session=True,
-                                **popen)
+        environment = dict(self.environment, **(key or {}))
+        return subprocess.Popen(command, env=environment, start_new_session=True, **popen)
+
+    def key_of(self, evaluator_id=None):
+        """Return the key variable of an evaluator, or with None the optimizer's secret."""
+        if self.keys is None:
+            return None
+        if evaluator_id is None:
+            return {SECRET_VARIABLE: self.keys.secret.hex()}
+        return {CREDENTIAL_VARIABLE: self.keys.credential(evaluator_id).text()}
 
     def run(self, evaluators, optimizer_module, optimizer_parameters, rig=''):
         """
@@ -119,7 +138,7 @@ class System:
         for index in range(evaluators):
             self.start_evaluator(evaluator_role(index))
         self.start_rig(rig)
-        self.optimizer = self.node(optimizer_module, optimizer_parameters,
+        self.optimizer = self.node(optimizer_module, optimizer_parameters, self.key_of(),
                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         relay = threading.Thread(target=self.relay_optimizer, daemon=True)
         relay.start()
@@ -134,7 +153,7 @@ class System:
         log = open(self.bag / 'logs' / f'{evaluator_id}.log', 'w')
         self.evaluators[role] = self.node(
             'hand_codesign.ros.evaluator_node',
-            {'evaluator_id': evaluator_id, 'subscribers_expected': 2},
+            {'evaluator_id': evaluator_id, 'subscribers_expected': 2}, self.key_of(evaluator_id),
             remaps=[f'__node:={node_name(evaluator_id)}'],
             stdout=log, stderr=subprocess.STDOUT)
         log.close()
@@ -144,12 +163,14 @@ class System:
         nodes = []
         if rig:
             nodes.append(('rig_evaluator', 'hand_codesign.ros.rig_evaluator_node',
-                          {'evaluator_id': 'rig_evaluator', 'subscribers_expected': 2}))
+                          {'evaluator_id': 'rig_evaluator', 'subscribers_expected': 2},
+                          self.key_of('rig_evaluator')))
         if rig == 'sim':
-            nodes.append(('sim_rig', 'hand_codesign.ros.sim_rig_node', self.rig_parameters))
-        for name, module, parameters in nodes:
+            nodes.append(('sim_rig', 'hand_codesign.ros.sim_rig_node', self.rig_parameters,
+                          None))
+        for name, module, parameters, key in nodes:
             with open(self.bag / 'logs' / f'{name}.log', 'w') as log:
-                self.rig_nodes.append(self.node(module, parameters, stdout=log,
+                self.rig_nodes.append(self.node(module, parameters, key, stdout=log,
                                                 stderr=subprocess.STDOUT))
 
     def start_recorder(self):

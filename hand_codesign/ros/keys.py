@@ -1,0 +1,89 @@
+"""
+The keys of a node and the signatures of its messages (hand_codesign.core.signing) over ROS.
+
+A run's own processes get their keys from `hand-codesign run` through an environment variable
+(see hand_codesign.ros.runner for why), which is removed from the node's environment once
+read; an evaluator on another host reads its Credential from the file of its `key_file`
+parameter. A node without any key works unsigned: an optimizer then takes every answer (and
+warns), an evaluator every candidate.
+"""
+
+import array
+import os
+import pathlib
+import socket
+
+from hand_codesign.core.signing import Credential
+from hand_codesign.core.signing import CREDENTIAL_VARIABLE
+from hand_codesign.core.signing import parse_secret
+from hand_codesign.core.signing import run_digest
+from hand_codesign.core.signing import RunKeys
+from hand_codesign.core.signing import SECRET_VARIABLE
+from hand_codesign.core.signing import SigningError
+
+
+def _bytes(signature):
+    return array.array('B', signature)
+
+
+class OptimizerSigner:
+    """Sign the optimizer's RunInfo and Candidates; check Evaluations (all pass if unsigned)."""
+
+    def __init__(self, keys):
+        self.keys = keys
+        self.digest = b''
+        self.note = ('' if keys is not None else
+                     '; UNSIGNED run (no run secret): any answer on the domain is taken')
+
+    @classmethod
+    def from_environment(cls):
+        text = os.environ.pop(SECRET_VARIABLE, '')
+        return cls(RunKeys(parse_secret(text, SECRET_VARIABLE)) if text else None)
+
+    def run_info(self, message):
+        """Return the RunInfo signed; its digest is what the candidates' signatures cover."""
+        if self.keys is not None:
+            message.signature = _bytes(self.keys.sign_run_info(message))
+            self.digest = run_digest(message)
+        return message
+
+    def candidate(self, message):
+        if self.keys is not None:
+            message.signature = _bytes(self.keys.sign_candidate(message, self.digest))
+        return message
+
+    def valid(self, evaluation):
+        return self.keys is None or self.keys.evaluation_valid(evaluation)
+
+
+def evaluator_credential(settings):
+    """
+    Return (Credential or None, evaluator id) of an evaluator node's settings.
+
+    key_file: the parameter (a file a run wrote with --write-key-file); empty: the variable
+    the runner set, or no key. The credential fixes the evaluator id; a different non-empty
+    evaluator_id parameter is an error (the key would not match it). Without a key, the id is
+    the parameter's or <host>-<pid>.
+    """
+    key_file, evaluator_id = settings['key_file'], settings['evaluator_id']
+    text = os.environ.pop(CREDENTIAL_VARIABLE, '')
+    source = CREDENTIAL_VARIABLE
+    if key_file:
+        path = pathlib.Path(key_file)
+        if not path.is_file():
+            raise SigningError(f'parameter key_file: {path} is not a file')
+        text, source = path.read_text(), f'key_file {path}'
+    if not text:
+        return None, evaluator_id or f'{socket.gethostname()}-{os.getpid()}'
+    credential = Credential.parse(text, source)
+    if evaluator_id and evaluator_id != credential.evaluator_id:
+        raise SigningError(f'{source}: the key is for evaluator "{credential.evaluator_id}", '
+                           f'but parameter evaluator_id is "{evaluator_id}"')
+    return credential, credential.evaluator_id
+
+
+def sign_evaluation(credential, message):
+    """Return the Evaluation signed with the evaluator's key (unchanged when unsigned)."""
+    if credential is not None:
+        message.signature = _bytes(credential.sign_evaluation(message))
+    return message

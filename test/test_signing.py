@@ -1,0 +1,165 @@
+"""Keys and signatures of a run's messages: what is signed, who signs, what evaluators take."""
+
+import hashlib
+import hmac
+import pathlib
+import re
+import struct
+
+from hand_codesign.core import contract
+from hand_codesign.core.evaluation_jobs import EvaluatorInbox
+from hand_codesign.core.signing import Credential
+from hand_codesign.core.signing import RunKeys
+from hand_codesign.core.signing import SIGNED_FIELDS
+from hand_codesign.core.signing import SigningError
+from hand_codesign.core.signing import UNSIGNED_FIELDS
+from hand_codesign.ros.keys import evaluator_credential
+from hand_codesign.ros.keys import OptimizerSigner
+from hand_codesign.ros.keys import sign_evaluation
+from hand_codesign_msgs.msg import Candidate
+from hand_codesign_msgs.msg import Evaluation
+from hand_codesign_msgs.msg import RunInfo
+import pytest
+
+MSG_DEFS = pathlib.Path(__file__).resolve().parents[1] / 'msg_defs'
+SECRET = bytes(range(32))
+KINDS = {'string': 's', 'bool': 'u', 'uint8': 'u', 'uint32': 'u', 'uint64': 'u',
+         'float64': 'f'}
+
+
+def msg_fields(name):
+    """Return [(field, type)] of a .msg file, constants and comments left out."""
+    fields = []
+    for line in (MSG_DEFS / f'{name}.msg').read_text().splitlines():
+        line = line.split('#')[0].strip()
+        if line and '=' not in line:
+            field_type, field = line.split()[:2]
+            fields.append((field, field_type))
+    return fields
+
+
+@pytest.mark.parametrize('name', ['RunInfo', 'Candidate', 'Evaluation'])
+def test_every_field_but_signature_and_stamp_is_signed_in_msg_order(name):
+    # a field added to the message and forgotten here would travel unsigned
+    expected = []
+    for field, field_type in msg_fields(name):
+        if field in UNSIGNED_FIELDS:
+            continue
+        base = re.sub(r'\[\]$', '', field_type)
+        expected.append((field, KINDS[base] + ('[]' if base != field_type else '')))
+    assert list(SIGNED_FIELDS[contract.type_name(name)]) == expected
+
+
+def string(text):
+    data = text.encode()
+    return struct.pack('<I', len(data)) + data
+
+
+def test_the_signed_bytes_are_those_the_msg_comment_spells():
+    # written out from RunInfo.msg's comment, as another language would, for one Candidate
+    message = Candidate(run_id='r', generation=1, candidate_id=2, evaluator_id='é', attempt=3,
+                        structure=[2, 1], world_states=0, horizon=0.5, genome=[0.25],
+                        genome_names=['g'])
+    run = RunInfo(run_id='r', task_name='t')
+    run_bytes = (string('hand_codesign_msgs/msg/RunInfo') + string('r') + string('t')
+                 + string('') + struct.pack('<Q', 0) + string('') + struct.pack('<QQQ', 0, 0, 0)
+                 + struct.pack('<I', 0) * 2 + string(''))
+    candidate_bytes = (
+        string('hand_codesign_msgs/msg/Candidate') + string('r') + struct.pack('<QQ', 1, 2)
+        + string('é') + struct.pack('<Q', 3) + struct.pack('<IQQ', 2, 2, 1)
+        + struct.pack('<Q', 0) + struct.pack('<d', 0.5) + struct.pack('<Id', 1, 0.25)
+        + struct.pack('<I', 1) + string('g')
+        # the design in physical terms, all empty here: names, values, URDF, controller
+        + struct.pack('<II', 0, 0) + string('') * 3 + struct.pack('<Q', 0)
+        + struct.pack('<IIII', 0, 0, 0, 0))
+    key = hmac.new(SECRET, b'evaluator\x00' + 'é'.encode(), hashlib.sha256).digest()
+    expected = hmac.new(key, candidate_bytes + hashlib.sha256(run_bytes).digest(),
+                        hashlib.sha256).digest()
+    signer = OptimizerSigner(RunKeys(SECRET))
+    signer.run_info(run)
+    assert bytes(signer.candidate(message).signature) == expected
+    assert bytes(run.signature) == hmac.new(
+        hmac.new(SECRET, b'run_info', hashlib.sha256).digest(), run_bytes,
+        hashlib.sha256).digest()
+
+
+def signed_run():
+    signer = OptimizerSigner(RunKeys(SECRET))
+    run = signer.run_info(RunInfo(run_id='run-1', task_name='task5', task_yaml='x: 1', seed=7))
+    return signer, run
+
+
+def test_a_candidate_holds_only_for_its_evaluator_its_run_and_its_fields():
+    signer, run = signed_run()
+    keys = RunKeys(SECRET)
+    mine, other = keys.credential('evaluator-0'), keys.credential('evaluator-1')
+    message = signer.candidate(Candidate(run_id='run-1', candidate_id=4, genome=[0.5] * 3,
+                                         evaluator_id='evaluator-0'))
+    digest = signer.digest
+    assert mine.candidate_valid(message, digest)
+    assert not other.candidate_valid(message, digest)
+    assert not mine.candidate_valid(message, hashlib.sha256(b'another RunInfo').digest())
+    message.genome = [0.5, 0.5, 0.25]
+    assert not mine.candidate_valid(message, digest)
+    assert mine.run_info_valid(run)
+    run.seed = 8
+    assert not mine.run_info_valid(run)
+
+
+def test_an_evaluation_holds_only_under_the_key_of_the_evaluator_it_names():
+    keys = RunKeys(SECRET)
+    answer = sign_evaluation(keys.credential('evaluator-0'), Evaluation(
+        run_id='run-1', candidate_id=4, evaluator_id='evaluator-0', objectives=[0.125]))
+    assert OptimizerSigner(keys).valid(answer)
+    answer.evaluator_id = 'evaluator-1'        # one evaluator cannot sign as another
+    assert not OptimizerSigner(keys).valid(answer)
+    forged = Evaluation(run_id='run-1', candidate_id=4, evaluator_id='evaluator-0',
+                        objectives=[0.0])
+    assert not OptimizerSigner(keys).valid(forged)
+    assert not OptimizerSigner(RunKeys(bytes(32))).valid(sign_evaluation(
+        keys.credential('evaluator-0'), forged))  # a key of another run
+    assert OptimizerSigner(None).valid(forged), 'an unsigned run takes every answer'
+
+
+def test_the_inbox_of_a_keyed_evaluator_takes_only_signed_messages():
+    signer, run = signed_run()
+    credential = RunKeys(SECRET).credential('evaluator-0')
+    inbox = EvaluatorInbox('evaluator-0', credential=credential)
+    forged_run = RunInfo(run_id='run-1', task_name='task5', task_yaml='evil: 1', seed=7)
+    assert inbox.run_announced(forged_run) == [] and inbox.rejected == 1
+    early = signer.candidate(Candidate(run_id='run-1', candidate_id=1,
+                                       evaluator_id='evaluator-0'))
+    assert inbox.candidate_arrived(early) == []   # waits for its RunInfo, then is checked
+    assert inbox.run_announced(run) == [early]
+    assert inbox.runs['run-1'].task_yaml == 'x: 1'
+    forged = Candidate(run_id='run-1', candidate_id=2, evaluator_id='evaluator-0')
+    assert inbox.candidate_arrived(forged) == [] and inbox.rejected == 2
+    # the forgery did not use up the (candidate, attempt) of the real one
+    real = signer.candidate(Candidate(run_id='run-1', candidate_id=2,
+                                      evaluator_id='evaluator-0'))
+    assert inbox.candidate_arrived(real) == [real]
+    assert inbox.candidate_arrived(real) == [], 'taken twice'
+    assert inbox.run_announced(forged_run) == [] and inbox.rejected == 3
+
+
+def test_key_files_round_trip_and_bad_ones_say_what_is_wrong(tmp_path, monkeypatch):
+    credential = RunKeys(SECRET).credential('host-b')
+    path = tmp_path / 'host-b.key'
+    path.write_text(credential.text())
+    monkeypatch.delenv('HAND_CODESIGN_EVALUATOR_KEY', raising=False)
+    read, evaluator_id = evaluator_credential({'key_file': str(path), 'evaluator_id': ''})
+    assert evaluator_id == 'host-b' and read.key == credential.key
+    assert SECRET.hex() not in path.read_text(), 'a key file must not hold the run secret'
+    with pytest.raises(SigningError, match='the key is for evaluator "host-b"'):
+        evaluator_credential({'key_file': str(path), 'evaluator_id': 'host-c'})
+    path.write_text('{"evaluator_id": "host-b"}')
+    with pytest.raises(SigningError, match=f'key_file {path}: expected a line of JSON'):
+        evaluator_credential({'key_file': str(path), 'evaluator_id': ''})
+    assert evaluator_credential({'key_file': '', 'evaluator_id': 'e'}) == (None, 'e')
+
+
+def test_each_evaluator_has_its_own_key():
+    keys = RunKeys(SECRET)
+    assert keys.key_of('evaluator-0') != keys.key_of('evaluator-1')
+    assert RunKeys(bytes(32)).key_of('evaluator-0') != keys.key_of('evaluator-0')
+    assert Credential.parse(keys.credential('a').text(), 'x').run_info_key == keys.run_info_key
