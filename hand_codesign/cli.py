@@ -75,7 +75,7 @@ def add_run_arguments(parser):
 def add_rig_arguments(parser):
     parser.add_argument('--rig', choices=('hardware', 'sim'), default='',
                         help='also start a rig evaluator: "hardware" for a test rig that joins '
-                             'the ROS domain, "sim" with a simulated rig (README: rigs)')
+                             'the ROS domain, "sim" with a simulated rig (docs/RIG.md)')
     parser.add_argument('--rig-rate', type=float, default=0.0,
                         help='--rig sim: poses per second (default 0: every physics step)')
     parser.add_argument('--rig-phase', type=float, default=0.0,

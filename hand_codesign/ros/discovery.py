@@ -10,7 +10,7 @@ an evaluator on another host sets to join. Discovery beyond this host needs the 
 which the runner sets for its processes when the server is on.
 
 The other way without multicast needs no server: ROS_STATIC_PEERS (a ';'-separated list of
-addresses) on both sides, see the README.
+addresses) on both sides, see docs/DISTRIBUTED.md.
 """
 
 import os
