@@ -59,12 +59,13 @@ def require_run_info(record, purpose):
     return record.run_info
 
 
-def run_task_of(record, structure=None, world_states=None, horizon=None):
-    """Return the Task of the run (for `structure`, `world_states`, `horizon` when given)."""
+def run_task_of(record, structure=None, world_states=None, horizon=None, stage=0,
+                held_out=False):
+    """Return the Task of the run (for `structure`, `world_states`, ... when given)."""
     info = require_run_info(record, 'rebuilding the task')
     try:
         return info.task(structure, f'{record.path} (RunInfo.task_yaml)', world_states,
-                         horizon)
+                         horizon, stage, held_out)
     except (TaskError, ValueError) as error:
         raise UserError(f'{record.path}: the task recorded in the bag cannot be rebuilt: '
                         f'{error}') from None
@@ -238,6 +239,8 @@ class RecordedDesign:
     fitness: float
     world_objectives: np.ndarray  # (worlds, objectives), or None
     evaluator_id: str
+    stage: int = 0               # of a two-stage task (core.stages); 0: one stage, older bags
+    held_out: bool = False       # evaluated on the held-out worlds (a hierarchy check)
 
 
 def recorded_design(record, candidate_id):
@@ -269,6 +272,8 @@ def recorded_design(record, candidate_id):
         structure=tuple(int(joints) for joints in candidate['structure']),
         world_states=int(candidate.get('world_states', 0) or 0),
         horizon=float(candidate.get('horizon', 0.0) or 0.0),
+        stage=int(candidate.get('stage', 0) or 0),
+        held_out=bool(candidate.get('held_out_worlds', False)),
         x=np.asarray(candidate['genome'], dtype=float),
         genome_names=tuple(candidate['genome_names']), objective_names=names,
         objectives=objectives, fitness=fitness, world_objectives=world_objectives,
@@ -278,7 +283,7 @@ def recorded_design(record, candidate_id):
 def design_task(record, design):
     """Return the Task with which a RecordedDesign was evaluated."""
     return run_task_of(record, design.structure or None, design.world_states or None,
-                       design.horizon or None)
+                       design.horizon or None, design.stage, design.held_out)
 
 
 def last_summary(record):
