@@ -221,16 +221,20 @@ def test_a_hierarchy_checks_each_structure_on_its_evaluation_worlds():
     clock = Clock()
     controller, outbox = start(task, clock)
     size = len(task.objective_names)
-    checks = []
+    checks, sent_all = [], []
     while outbox.result is None:
         sent = outbox.take()
+        sent_all += sent
         checks += [world_states for _, _, _, _, world_states in sent if world_states]
         for candidate, evaluator, _, _, _ in sent:
             controller.evaluated(RUN, candidate.candidate_id, evaluator,
                                  objectives_of(candidate.x, size), 0.1)
     assert checks and all(w == task.hierarchy.evaluation_world_states for w in checks)
-    check_lines = [text for _, text in outbox.lines if 'best design on the evaluation' in text]
-    assert check_lines[0].startswith('structure [1]: best design on the evaluation worlds')
+    check_lines = [text for _, text in outbox.lines if 'best design on the held-out' in text]
+    seeds = plain_loop(task).outcomes[0].seeds
+    assert check_lines[0].startswith(f'structure [1] (optimized with seeds {seeds[0]}, '
+                                     f'{seeds[1]}): best design on the held-out worlds')
+    assert all(candidate.held_out for candidate, _, _, _, w in sent_all if w)
     best, structure = plain_loop(task).best
     assert outbox.result['best_candidate_id'] == best.candidate_id
     assert outbox.result['structure'] == list(structure)

@@ -166,8 +166,10 @@ class RunController:
             optimizer.result, self.told, elapsed, checking, horizon)
         self.outbox.send_summary(summary)
         if checking:
+            seeds = ', '.join(str(seed) for seed in self.search.outcomes[-1].seeds)
             self.outbox.log(
-                f'structure {list(structure)}: best design on the evaluation worlds: '
+                f'structure {list(structure)} (optimized with seeds {seeds}): best design on '
+                'the held-out worlds: '
                 + ', '.join(f'{name} {value:.4g}'
                             for name, value in zip(self.task.objective_names, objectives[0])))
             return

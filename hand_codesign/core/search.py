@@ -112,6 +112,11 @@ class Search:
         return self._driver.stop()
 
     @property
+    def outcomes(self):
+        """Return the hierarchy's StructureOutcomes so far (empty without a hierarchy)."""
+        return self._driver.outcomes if self.hierarchical else []
+
+    @property
     def best(self):
         """Return (OptimizerResult, structure) of the best design so far, or None."""
         if self.hierarchical and self._driver.result is not None:
