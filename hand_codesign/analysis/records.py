@@ -373,6 +373,26 @@ def _hierarchy_best(record):
     return None if best is None else int(best[0].candidate_id)
 
 
+def structure_bests(record):
+    """
+    Return [(structure, candidate id)] of every structure a hierarchical run checked, in order.
+
+    Each is the structure's best design (the better of its optimizations), as the search
+    replayed from the bag finds it; [] for a run without a hierarchy.
+    """
+    task = run_task_of(record)
+    if task.hierarchy is None:
+        return []
+    search = Search(task)
+    try:
+        replay(search, recorded_evaluations(record))
+    except OptimizerError as error:
+        raise UserError(f'{record.path}: the recorded hierarchy run disagrees with a fresh '
+                        f'search of its task and seed: {error}') from None
+    return [(outcome.structure, int(outcome.result.candidate_id))
+            for outcome in search.outcomes]
+
+
 def ranked_candidate_id(record, generation=None, rank=0):
     """Return the id of the rank-th best (lowest fitness) OK evaluation, of one generation."""
     rows = evaluation_rows(record)
