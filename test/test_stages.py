@@ -1,8 +1,14 @@
 """Two stages in one run (Tasks 1 and 2): the nominal world first, then the randomized worlds."""
 
 import dataclasses
+import json
 import pathlib
 
+from analysis_run import run_codesign
+from hand_codesign.analysis.bag import read_run
+from hand_codesign.analysis.records import design_task
+from hand_codesign.analysis.records import recorded_design
+from hand_codesign.cli import main
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.evaluation_jobs import candidate_task
 from hand_codesign.core.optimizers import replay
@@ -55,7 +61,7 @@ def test_stage_one_uses_the_nominal_world_and_stage_two_starts_from_its_result()
     # stage 2's optimizer started at stage 1's best design, with its own seed
     assert np.array_equal(driver.optimizer.x0, driver.stage_results[1].x)
     assert driver.seeds[1] == task.seed and driver.seeds[2] != task.seed
-    assert search.stop() == {'stage 2': {'maxiter': task.iterations}}
+    assert search.stop() == {'stage': 2, 'maxiter': task.iterations}
     best, _ = search.best
     assert best.candidate_id >= task.iterations * task.population  # a stage-2 design
 
@@ -114,3 +120,32 @@ def test_two_stages_and_a_hierarchy_do_not_combine():
     task = load_run_task(TASKS / 'task4.yaml')
     with pytest.raises(TaskError, match='two_stage: expected no two stages'):
         task.replace(two_stage=True)
+
+
+def test_a_real_two_stage_run_is_recorded_replayed_and_analyzed(tmp_path):
+    text = (TASKS / 'task1.yaml').read_text() + 'two_stage: true\n'
+    task_file = tmp_path / 'task1_two_stage.yaml'
+    task_file.write_text(text.replace('seed_design: task1_seed.yaml',
+                                      f'seed_design: {TASKS / "task1_seed.yaml"}'))
+    bag = tmp_path / 'two_stage'
+    output = run_codesign(bag, ['--iterations', '2', '--popsize', '4', '--world-states', '2',
+                                '--seed', '2'], task=task_file)
+    assert 'generation 2/2 of stage 1' in output and 'generation 2/2 of stage 2' in output
+    record = read_run(bag)
+    candidates = record.candidates
+    stage_of = dict(zip(candidates['candidate_id'], candidates['stage']))
+    assert [stage_of[i] for i in range(16)] == [1] * 8 + [2] * 8
+    worlds = {int(row['candidate_id']): len(row['world_objectives']) // 8
+              for row in (record.evaluations.row(i) for i in range(len(record.evaluations)))}
+    assert [worlds[i] for i in range(16)] == [1] * 8 + [2] * 8  # 8 objectives per world
+    result = json.loads((bag / 'result.json').read_text())
+    assert result['best_candidate_id'] >= 8 and result['stop_reason'] == 'stage=2, maxiter=2'
+    # analyze and replay rebuild each candidate's task with its stage (records.design_task)
+    stage_one = recorded_design(record, 3)
+    assert stage_one.stage == 1
+    rebuilt = design_task(record, stage_one)
+    assert np.array_equal(evaluate(stage_one.x, rebuilt).objectives, stage_one.objectives)
+    assert main(['analyze', str(bag), '--out', str(tmp_path / 'report')]) == 0
+    rows = (tmp_path / 'report' / 'generations.csv').read_text().splitlines()
+    assert rows[0].endswith(',stage') and [row[-1] for row in rows[1:]] == list('1122')
+    assert 'of stage 2 (the randomized worlds)' in (tmp_path / 'report' / 'report.md').read_text()

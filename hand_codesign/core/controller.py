@@ -159,11 +159,13 @@ class RunController:
         told_ids = [candidate.candidate_id for candidate in self.batch]
         objectives = np.array([self.results[candidate_id] for candidate_id in told_ids])
         generation, horizon = self.batch[0].generation, self.batch[0].horizon
+        stage = self.batch[0].stage
         self.batch = None
         elapsed = self.clock() - self.started
         summary = generation_summary(
             generation, structure, self.task.objective_names, told_ids, objectives,
             optimizer.result, self.told, elapsed, checking, horizon)
+        summary['stage'] = stage  # for the progress line; the candidates carry it
         self.outbox.send_summary(summary)
         if checking:
             seeds = ', '.join(str(seed) for seed in self.search.outcomes[-1].seeds)

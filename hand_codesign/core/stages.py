@@ -62,7 +62,7 @@ class StagedSearch:
     def stop(self):
         """Return why the search stopped (stage 2's optimizer), as a dict; empty while it runs."""
         if self.stage == 2 and self._optimizer.stop():
-            return {'stage 2': self._optimizer.stop()}
+            return {'stage': 2, **self._optimizer.stop()}
         return {}
 
     @property
