@@ -1,8 +1,8 @@
 """Two stages in one run (Tasks 1 and 2): the nominal world first, then the randomized worlds."""
 
-import dataclasses
 import json
 import pathlib
+import types
 
 from analysis_run import run_codesign
 from hand_codesign.analysis.bag import read_run
@@ -102,15 +102,14 @@ def test_real_evaluations_of_each_stage_are_what_an_evaluator_computes():
     assert [len(recorded[c.candidate_id].world_objectives) for c in batches[0]] == [1] * 4
     assert [len(recorded[c.candidate_id].world_objectives) for c in batches[1]] == [2] * 4
     # an evaluator rebuilds each candidate's task from the run's RunInfo and the message
-    run = dataclasses.make_dataclass('Run', ['run_id', 'task_yaml', 'seed', 'iterations',
-                                            'population', 'world_states'])(
-        'r', task.source_text.replace('num_world_states: 16', 'num_world_states: 16\n'
-                                      'two_stage: true'), task.seed, 1, 4, 2)
+    run = types.SimpleNamespace(
+        run_id='r', task_yaml=task.source_text + '\ntwo_stage: true\n', seed=task.seed,
+        iterations=1, population=4, world_states=2)
     for batch in batches:
         candidate = batch[0]
-        message = dataclasses.make_dataclass('Msg', [
-            'run_id', 'structure', 'world_states', 'horizon', 'stage', 'held_out_worlds'])(
-            'r', [], 0, candidate.horizon, candidate.stage, False)
+        message = types.SimpleNamespace(
+            run_id='r', structure=[], world_states=0, horizon=candidate.horizon,
+            stage=candidate.stage, held_out_worlds=False)
         rebuilt, _ = candidate_task(run, message)
         assert np.array_equal(evaluate(candidate.x, rebuilt).objectives,
                               recorded[candidate.candidate_id].objectives)
@@ -123,10 +122,8 @@ def test_two_stages_and_a_hierarchy_do_not_combine():
 
 
 def test_a_real_two_stage_run_is_recorded_replayed_and_analyzed(tmp_path):
-    text = (TASKS / 'task1.yaml').read_text() + 'two_stage: true\n'
     task_file = tmp_path / 'task1_two_stage.yaml'
-    task_file.write_text(text.replace('seed_design: task1_seed.yaml',
-                                      f'seed_design: {TASKS / "task1_seed.yaml"}'))
+    task_file.write_text((TASKS / 'task1.yaml').read_text() + '\ntwo_stage: true\n')
     bag = tmp_path / 'two_stage'
     output = run_codesign(bag, ['--iterations', '2', '--popsize', '4', '--world-states', '2',
                                 '--seed', '2'], task=task_file)

@@ -61,7 +61,8 @@ from typing import Optional, Tuple
 
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.optimizers import (
-    Candidate, derived_seed, make_optimizer, OptimizerError, OptimizerResult, STATE_FORMAT, TellError)
+    Candidate, derived_seed, make_optimizer, OptimizerError, OptimizerResult, STATE_FORMAT,
+    TellError)
 import numpy as np
 
 Structure = Tuple[int, ...]

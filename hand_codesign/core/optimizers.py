@@ -102,7 +102,7 @@ class OptimizerResult:
 
 
 def derived_seed(seed, *path):
-    """Return the seed of a part of a run (e.g. derived_seed(run seed, structure, repeat))."""
+    """Return the seed of one part of a run from the run's seed and the part's indices."""
     words = [int(seed)] + [int(part) for part in path]
     return int(np.random.SeedSequence(words).generate_state(1)[0])
 
@@ -628,6 +628,6 @@ def _same_np_state(first, second):
 
 __all__ = [
     'AskTellOptimizer', 'Candidate', 'CmaEs', 'MoCmaEs', 'OptimizerError', 'OptimizerResult',
-    'ReplayError', 'SIGMA0', 'TellError', 'closest_to_zero', 'derived_seed', 'least_hypervolume_contributor',
-    'library_seed', 'make_optimizer', 'non_dominated', 'replay',
+    'ReplayError', 'SIGMA0', 'TellError', 'closest_to_zero', 'derived_seed',
+    'least_hypervolume_contributor', 'library_seed', 'make_optimizer', 'non_dominated', 'replay',
 ]

@@ -37,8 +37,8 @@ optimizer that refuses the budget) raise TaskError, HierarchyError or OptimizerE
 
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.hierarchy import bottom_up_path
-from hand_codesign.core.hierarchy import GROWN_FROM
 from hand_codesign.core.hierarchy import grown_choices
+from hand_codesign.core.hierarchy import GROWN_FROM
 from hand_codesign.core.hierarchy import grows_fingers
 from hand_codesign.core.hierarchy import REPEATS
 from hand_codesign.core.objectives import goal_schedule
