@@ -89,7 +89,9 @@ def test_json_round_trips_the_task():
     last = [entry['goals'][-1]['orientation'] for entry in summary['worlds']]
     assert len({tuple(q) for q in last}) == 5
     assert summary['steps_per_rollout'] == 400  # 2 s of 0.005 s
-    assert summary['budget']['physics_steps'] == 1000 * 250 * 5 * 400
+    # two stages: stage 1 on the nominal world, stage 2 on the 5 worlds
+    assert summary['budget']['stages'] == 2
+    assert summary['budget']['physics_steps'] == 1000 * 250 * (1 + 5) * 400
     assert summary['budget']['structures'][0]['start'] == 'seed design'
 
 

@@ -103,7 +103,7 @@ def test_real_evaluations_of_each_stage_are_what_an_evaluator_computes():
     assert [len(recorded[c.candidate_id].world_objectives) for c in batches[1]] == [2] * 4
     # an evaluator rebuilds each candidate's task from the run's RunInfo and the message
     run = types.SimpleNamespace(
-        run_id='r', task_yaml=task.source_text + '\ntwo_stage: true\n', seed=task.seed,
+        run_id='r', task_yaml=task.source_text, seed=task.seed,
         iterations=1, population=4, world_states=2)
     for batch in batches:
         candidate = batch[0]
@@ -122,8 +122,8 @@ def test_two_stages_and_a_hierarchy_do_not_combine():
 
 
 def test_a_real_two_stage_run_is_recorded_replayed_and_analyzed(tmp_path):
-    task_file = tmp_path / 'task1_two_stage.yaml'
-    task_file.write_text((TASKS / 'task1.yaml').read_text() + '\ntwo_stage: true\n')
+    task_file = TASKS / 'task1.yaml'
+    assert load_run_task(task_file).two_stage  # the paper's two stages
     bag = tmp_path / 'two_stage'
     output = run_codesign(bag, ['--iterations', '2', '--popsize', '4', '--world-states', '2',
                                 '--seed', '2'], task=task_file)
