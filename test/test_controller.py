@@ -238,3 +238,31 @@ def test_a_hierarchy_checks_each_structure_on_its_evaluation_worlds():
     best, structure = plain_loop(task).best
     assert outbox.result['best_candidate_id'] == best.candidate_id
     assert outbox.result['structure'] == list(structure)
+
+
+def test_a_two_stage_run_resumed_in_stage_two_ends_as_the_uninterrupted_run():
+    task = load_run_task(TASKS / 'task1.yaml', 4, 2, 4, 2)
+    assert task.two_stage
+    size = len(task.objective_names)
+    uninterrupted = plain_loop(task).best[0]
+    # the record of a run interrupted after stage 1 and one answer of stage 2
+    search, recorded, genomes = Search(task), {}, {}
+    while search.stage == 1:
+        batch = search.ask()
+        recorded.update({c.candidate_id: objectives_of(c.x, size) for c in batch})
+        genomes.update({c.candidate_id: c.x for c in batch})
+        search.tell({c.candidate_id: recorded[c.candidate_id] for c in batch})
+    first = search.ask()[0]
+    recorded[first.candidate_id], genomes[first.candidate_id] = objectives_of(first.x, size), \
+        first.x
+    point = rebuild_search(task, 'old-run', 'the record', recorded, genomes)
+    assert point.search.stage == 2 and list(point.known) == [first.candidate_id]
+    clock = Clock()
+    controller, outbox = start(task, clock, resumed=point)
+    sent = outbox.candidates
+    assert {c.stage for c, _, _, _, _ in sent} == {2}
+    assert first.candidate_id not in [c.candidate_id for c, _, _, _, _ in sent]
+    answer_everything(controller, outbox, size, clock)
+    assert outbox.result['best_candidate_id'] == uninterrupted.candidate_id
+    assert outbox.result['fitness'] == uninterrupted.fitness
+    assert outbox.result['stop_reason'] == 'stage=2, maxiter=2'
