@@ -26,7 +26,7 @@ draws only growing edges. Both hold here: from each structure the path takes
 3. else adding a finger,
 
 and among equals the most balanced structure (smallest longest finger), then the smallest
-tuple. So every structure of a number of joints that moves connect is visited before the hand
+tuple. So from each structure every move to an unvisited structure is tried before the hand
 grows. The task's `hierarchy.stop_structure` ends the path and bounds it: at most as many
 fingers, and joints per finger, as the stop structure has (and as max_fingers / max_joints
 allow). Task 4 ("stops when reaching a two-fingered hand with three joints", stop structure
