@@ -89,8 +89,9 @@ def main(argv=None):
     parser.add_argument('--share', type=float, help="share that must track (default: the task's)")
     args = parser.parse_args(argv)
     try:
+        # one stage: the bench compares horizons, not the two stages of Tasks 1 and 2
         task = load_run_task(args.task, args.seed, args.generations, args.population,
-                             args.world_states)
+                             args.world_states).replace(two_stage=False)
     except (OSError, TaskError) as error:
         print(f'bench_horizon: error: {error}', file=sys.stderr)
         return 2

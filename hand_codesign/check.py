@@ -84,11 +84,15 @@ def header(summary):
                       f'step size {budget["initial_sigma"]:g} (normalized genome)'))
     if summary['hierarchy']:
         check = budget['structures'][0]['check_world_states']
-        shared = min(check, budget['world_states'])
-        lines.append(wrap('hierarchy: ' + ' -> '.join(str(s) for s in summary['hierarchy'])
-                          + ' (each structure runs the whole budget, then its best design is '
-                          f'checked on {check} world states drawn with the same seed; the '
-                          f'first {shared} of them are training worlds)'))
+        grown = summary['hierarchy_grown']
+        path = summary['hierarchy'][:len(summary['hierarchy']) - len(grown['choices'])]
+        then = (f', then {grown["count"]} of {" ".join(str(s) for s in grown["choices"])}: a '
+                'finger added to the best checked structures of the most fingers'
+                if grown['choices'] else '')
+        lines.append(wrap('hierarchy: ' + ' -> '.join(str(s) for s in path) + then
+                          + f' (each structure runs the whole budget {budget["repeats"]} '
+                          'times with its own seed, then the better best design is checked on '
+                          f'{check} held-out world states, disjoint from the training worlds)'))
     else:
         lines.append(f'hand structure: {summary["structure"]} (fixed)')
     return '\n'.join(lines)
@@ -113,7 +117,8 @@ def physics(summary):
                           f'{early["distance"]:g} m and {early["angle"]:g} rad', '  '))
     rows = [['structure', 'genes', 'evaluations', 'rollouts', 'physics steps']]
     for entry in budget['structures']:
-        rows.append([str(entry['structure']), str(entry['genome_size']),
+        rows.append([str(entry['structure']) + (' *' if entry.get('grown') else ''),
+                     str(entry['genome_size']),
                      f'{entry["evaluations"]:,}', f'{entry["rollouts"]:,}',
                      f'{entry["physics_steps"]:,}'])
     if len(budget['structures']) > 1:
@@ -121,7 +126,11 @@ def physics(summary):
                      f'{budget["physics_steps"]:,}'])
     lines.append(wrap(f'whole budget ({budget["iterations"]} x {budget["population"]} x '
                       f'{summary["steps_per_evaluation"]:,} per structure'
-                      + (', plus each check of the hierarchy' if summary['hierarchy'] else '')
+                      + (f', {budget["repeats"]} times, plus each check of the hierarchy; * '
+                         f'grown, the {summary["hierarchy_grown"]["count"]} costliest counted'
+                         if summary['hierarchy'] else '')
+                      + (', stage 1 on the nominal world, then stage 2'
+                         if budget['stages'] == 2 else '')
                       + f'): {budget["physics_steps"]:,} steps, '
                       f'{budget["simulated_time"]:,.0f} s simulated', '  '))
     lines.append(indent(table(rows), 4))

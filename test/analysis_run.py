@@ -37,9 +37,9 @@ class RealRun:
     result: dict
 
 
-def run_codesign(bag, budget=BUDGET, extra=(), timeout=300):
+def run_codesign(bag, budget=BUDGET, extra=(), timeout=300, task=TASK):
     """Run `hand-codesign run` to completion; return its output (assert it succeeded)."""
-    command = CLI + ['run', '--task', str(TASK), '--evaluators', '2', '--bag', str(bag),
+    command = CLI + ['run', '--task', str(task), '--evaluators', '2', '--bag', str(bag),
                      *budget, *extra]
     process = subprocess.run(command, cwd=ROOT, stdout=subprocess.PIPE,
                              stderr=subprocess.STDOUT, text=True, timeout=timeout)

@@ -89,7 +89,9 @@ def test_json_round_trips_the_task():
     last = [entry['goals'][-1]['orientation'] for entry in summary['worlds']]
     assert len({tuple(q) for q in last}) == 5
     assert summary['steps_per_rollout'] == 400  # 2 s of 0.005 s
-    assert summary['budget']['physics_steps'] == 1000 * 250 * 5 * 400
+    # two stages: stage 1 on the nominal world, stage 2 on the 5 worlds
+    assert summary['budget']['stages'] == 2
+    assert summary['budget']['physics_steps'] == 1000 * 250 * (1 + 5) * 400
     assert summary['budget']['structures'][0]['start'] == 'seed design'
 
 
@@ -106,21 +108,26 @@ def test_hierarchy_lists_its_structures_and_their_budget(capsys):
     summary = checked(capsys, str(TASKS / 'task4.yaml'))
     task = load_task(TASKS / 'task4.yaml')
     path = HierarchySearch(task).path
-    assert summary['hierarchy'] == [[1], [2], [1, 1], [1, 2], [2, 2], [2, 3]]
-    assert summary['hierarchy'] == [list(structure) for structure in path]
+    grown = [[1, 1, 1], [1, 1, 2], [1, 1, 3], [1, 2, 2], [1, 2, 3]]
+    assert summary['hierarchy'] == [[1], [2], [1, 1], [1, 2], [3], [1, 3], [2, 2], [2, 3]] + grown
+    assert summary['hierarchy'][:len(path)] == [list(structure) for structure in path]
+    assert summary['hierarchy_grown'] == {'count': 2, 'choices': grown}
     budget = summary['budget']
     assert [entry['genome_size'] for entry in budget['structures']] == [
-        genome_spec(task.replace(structure=structure)).size for structure in path]
-    # 200 iterations x 150 candidates x 64 worlds, plus the check on 128 worlds, of 200 steps
-    assert budget['physics_steps'] == 6 * (200 * 150 * 64 + 128) * 200
+        genome_spec(task.replace(structure=structure)).size
+        for structure in path + [tuple(s) for s in grown]]
+    # per structure twice 200 iterations x 150 candidates x 64 worlds, plus the check on 128
+    # worlds, of 200 steps; 8 structures of the path and the 2 grown ones
+    assert budget['physics_steps'] == 10 * (2 * 200 * 150 * 64 + 128) * 200
     assert any('hierarchy stops' in reason for reason in budget['may_end_early'])
     assert main(['check', str(TASKS / 'task4.yaml')]) == 0
     text = ' '.join(capsys.readouterr().out.split())  # unwrapped
-    assert 'hierarchy: [1] -> [2] -> [1, 1] -> [1, 2] -> [2, 2] -> [2, 3]' in text
-    assert '2,304,153,600 steps' in text
-    # "the first 64 of them are training worlds": the check's worlds begin with them
-    assert 'the first 64 of them are training worlds' in text
-    assert world_states(task.replace(num_world_states=128))[:64] == world_states(task)
+    assert ('hierarchy: [1] -> [2] -> [1, 1] -> [1, 2] -> [3] -> [1, 3] -> [2, 2] -> [2, 3], '
+            'then 2 of [1, 1, 1] [1, 1, 2] [1, 1, 3] [1, 2, 2] [1, 2, 3]') in text
+    assert f'{budget["physics_steps"]:,} steps' in text
+    assert '128 held-out world states, disjoint from the training worlds' in text
+    held_out = world_states(task.replace(num_world_states=128, held_out=True))
+    assert not set(held_out) & set(world_states(task))
 
 
 def test_overrides_and_early_termination_are_shown(capsys):
@@ -173,6 +180,7 @@ def test_broken_yaml_says_where_in_one_line(tmp_path, capsys):
 def test_a_hierarchy_that_cannot_reach_its_stop_is_refused(tmp_path, capsys):
     text = (TASKS / 'task4.yaml').read_text().replace('stop_structure: [2, 3]',
                                                       'stop_structure: [1, 1, 3]')
+    text = text.replace('max_fingers: 3', 'max_fingers: 2')
     path = tmp_path / 'task4_bad_stop.yaml'
     path.write_text(text)
     assert load_task(path).hierarchy.stop_structure == (1, 1, 3)  # loads, but cannot run

@@ -222,16 +222,48 @@ def test_a_hierarchy_checks_each_structure_on_its_evaluation_worlds():
     clock = Clock()
     controller, outbox = start(task, clock)
     size = len(task.objective_names)
-    checks = []
+    checks, sent_all = [], []
     while outbox.result is None:
         sent = outbox.take()
+        sent_all += sent
         checks += [world_states for _, _, _, _, world_states in sent if world_states]
         for candidate, evaluator, _, _, _ in sent:
             controller.evaluated(RUN, candidate.candidate_id, evaluator,
                                  objectives_of(candidate.x, size), 0.1)
     assert checks and all(w == task.hierarchy.evaluation_world_states for w in checks)
-    check_lines = [text for _, text in outbox.lines if 'best design on the evaluation' in text]
-    assert check_lines[0].startswith('structure [1]: best design on the evaluation worlds')
+    check_lines = [text for _, text in outbox.lines if 'best design on the held-out' in text]
+    seeds = plain_loop(task).outcomes[0].seeds
+    assert check_lines[0].startswith(f'structure [1] (optimized with seeds {seeds[0]}, '
+                                     f'{seeds[1]}): best design on the held-out worlds')
+    assert all(candidate.held_out for candidate, _, _, _, w in sent_all if w)
     best, structure = plain_loop(task).best
     assert outbox.result['best_candidate_id'] == best.candidate_id
     assert outbox.result['structure'] == list(structure)
+
+
+def test_a_two_stage_run_resumed_in_stage_two_ends_as_the_uninterrupted_run():
+    task = load_run_task(TASKS / 'task1.yaml', 4, 2, 4, 2)
+    assert task.two_stage
+    size = len(task.objective_names)
+    uninterrupted = plain_loop(task).best[0]
+    # the record of a run interrupted after stage 1 and one answer of stage 2
+    search, recorded, genomes = Search(task), {}, {}
+    while search.stage == 1:
+        batch = search.ask()
+        recorded.update({c.candidate_id: objectives_of(c.x, size) for c in batch})
+        genomes.update({c.candidate_id: c.x for c in batch})
+        search.tell({c.candidate_id: recorded[c.candidate_id] for c in batch})
+    first = search.ask()[0]
+    recorded[first.candidate_id], genomes[first.candidate_id] = objectives_of(first.x, size), \
+        first.x
+    point = rebuild_search(task, 'old-run', 'the record', recorded, genomes)
+    assert point.search.stage == 2 and list(point.known) == [first.candidate_id]
+    clock = Clock()
+    controller, outbox = start(task, clock, resumed=point)
+    sent = outbox.candidates
+    assert {c.stage for c, _, _, _, _ in sent} == {2}
+    assert first.candidate_id not in [c.candidate_id for c, _, _, _, _ in sent]
+    answer_everything(controller, outbox, size, clock)
+    assert outbox.result['best_candidate_id'] == uninterrupted.candidate_id
+    assert outbox.result['fitness'] == uninterrupted.fitness
+    assert outbox.result['stop_reason'] == 'stage=2, maxiter=2'

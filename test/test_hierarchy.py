@@ -9,6 +9,7 @@ from hand_codesign.core.hierarchy import (
     run_hierarchy, transitions)
 from hand_codesign.core.optimizers import replay, TellError
 from hand_codesign.core.task import load_task, parse_task
+from hand_codesign.core.worlds import world_states
 import numpy as np
 import pytest
 
@@ -49,7 +50,8 @@ class StructureDependentErrors:
         self.calls = []
 
     def __call__(self, task, candidates):
-        self.calls.append((task.structure, task.num_world_states, len(candidates)))
+        self.calls.append((task.structure, task.num_world_states, len(candidates),
+                           task.held_out))
         results = {}
         for candidate in candidates:
             distance = float(np.mean((candidate.x - 0.6) ** 2))
@@ -74,14 +76,20 @@ def test_transitions_add_remove_or_move_one_joint():
     assert transitions((2,), max_fingers=1) == {(3,): 'add joint', (1,): 'remove joint'}
 
 
-def test_bottom_up_path_prefers_moving_a_joint_to_adding_one():
-    assert bottom_up_path((1,), stop=(2, 3)) == [(1,), (2,), (1, 1), (1, 2), (2, 2), (2, 3)]
-    assert bottom_up_path((1,)) == [
-        (1,), (2,), (1, 1), (1, 2), (1, 1, 1), (1, 1, 2), (1, 2, 2), (2, 2, 2), (2, 2, 3),
-        (2, 3, 3), (3, 3, 3)]
-    assert bottom_up_path((2, 1), stop=(3, 3)) == [(1, 2), (2, 2), (2, 3), (3, 3)]
-    with pytest.raises(HierarchyError, match=r'stop structure \[1, 3\] is not on the'):
-        bottom_up_path((1,), stop=(1, 3))
+def test_bottom_up_path_tries_moves_before_additions():
+    path = bottom_up_path((1,), stop=(2, 3))
+    assert path == [(1,), (2,), (1, 1), (1, 2), (3,), (1, 3), (2, 2), (2, 3)]
+    for before, after in zip(path, path[1:]):
+        kind = transitions(before, 2, 3)[after]
+        assert kind in ('move joint', 'add joint', 'add finger')
+        moves = [s for s, k in transitions(before, 2, 3).items() if k == 'move joint']
+        if kind != 'move joint':  # an addition only once every move leads somewhere visited
+            assert all(s in path[:path.index(before)] for s in moves)
+    assert bottom_up_path((2, 1), stop=(3, 3)) == [(1, 2), (3,), (1, 3), (2, 2), (2, 3), (3, 3)]
+    assert bottom_up_path((1,), max_fingers=2, max_joints=2) == [
+        (1,), (2,), (1, 1), (1, 2), (2, 2)]
+    with pytest.raises(HierarchyError, match=r'stop structure \[3, 3\] is not on the'):
+        bottom_up_path((1,), stop=(3, 3), max_joints=2)
 
 
 def test_search_stops_at_the_first_structure_meeting_the_thresholds():
@@ -94,13 +102,40 @@ def test_search_stops_at_the_first_structure_meeting_the_thresholds():
     final = search.result
     assert final.structure == (1, 2)
     assert final.check_objectives[0] <= 0.004 and final.check_objectives[1] <= 0.11
-    # Per structure: 3 generations of 4 on the task's worlds, then one check on 32 worlds.
+    # Per structure: twice 3 generations of 4 on the task's worlds, then one check on 32 worlds.
     assert evaluate_batch.calls == [
         call for structure in [(1,), (2,), (1, 1), (1, 2)]
-        for call in [(structure, 8, 4)] * 3 + [(structure, 32, 1)]]
-    # Ids run on across structures; the check evaluates the structure's best design.
-    assert [o.check_id for o in search.outcomes] == [12, 25, 38, 51]
-    assert all(o.result.candidate_id < o.check_id for o in search.outcomes)
+        for call in [(structure, 8, 4, False)] * 6 + [(structure, 32, 1, True)]]
+    # Ids run on across structures; the check evaluates the better optimization's best design.
+    assert [o.check_id for o in search.outcomes] == [24, 49, 74, 99]
+    for outcome in search.outcomes:
+        assert len(outcome.results) == 2 and len(set(outcome.seeds)) == 2
+        assert outcome.result is min(outcome.results, key=lambda r: r.fitness)
+        assert outcome.results[0].candidate_id < outcome.check_id - 12 <= \
+            outcome.results[1].candidate_id < outcome.check_id
+    seeds = [seed for outcome in search.outcomes for seed in outcome.seeds]
+    assert len(set(seeds)) == len(seeds) and hierarchy_task().seed not in seeds
+
+
+def test_three_finger_hands_grow_from_the_best_two_finger_hands():
+    task = load_task(ROOT / 'config' / 'tasks' / 'task4.yaml')
+    task = task.replace(iterations=1, population=4, hierarchy=dataclasses.replace(
+        task.hierarchy, position_threshold=0.0))
+    scores = {(1, 3): 0.1, (2, 2): 0.3, (1, 2): 0.2, (2, 3): 0.5, (1, 1): 0.9}
+
+    def errors(batch_task, candidates):  # the check of (1, 3) and (1, 2) score best
+        base = scores.get(batch_task.structure, 1.0)
+        return {c.candidate_id: np.full(2, base + float(np.sum(c.x ** 2)) * 1e-3)
+                for c in candidates}
+
+    search = run_hierarchy(task, errors)
+    visited = [o.structure for o in search.outcomes]
+    assert visited == [(1,), (2,), (1, 1), (1, 2), (3,), (1, 3), (2, 2), (2, 3),
+                       (1, 1, 3), (1, 1, 2)]
+    assert search.stop() == {'path_end': (1, 1, 2)}
+    scores[(1, 2)] = 0.4  # now (2, 2) is the second best two-finger hand
+    assert [o.structure for o in run_hierarchy(task, errors).outcomes][-2:] == [
+        (1, 1, 3), (1, 2, 2)]
 
 
 def test_search_runs_the_whole_path_when_no_structure_is_good_enough():
@@ -108,7 +143,7 @@ def test_search_runs_the_whole_path_when_no_structure_is_good_enough():
     task = task.replace(hierarchy=dataclasses.replace(task.hierarchy, position_threshold=0.0))
     search = run_hierarchy(task, StructureDependentErrors())
     assert search.stop() == {'path_end': (2, 3)}
-    assert [o.structure for o in search.outcomes] == [(2, 2), (2, 3)]
+    assert [o.structure for o in search.outcomes] == [(2, 2), (1, 3), (2, 3)]  # move first
     assert search.result.structure == (2, 3)  # the lowest weighted sum on the check worlds
     assert len(search.outcomes[0].result.pareto_ids) >= 1
 
@@ -126,7 +161,7 @@ def test_search_is_restored_and_replayed_exactly():
     saved = reference.get_state()
     restored = HierarchySearch.from_state(saved)
     rebuilt = HierarchySearch(task)
-    assert replay(rebuilt, recorded) == 8  # 2 structures of 3 generations and a check
+    assert replay(rebuilt, recorded) == 14  # 2 structures of twice 3 generations and a check
     for search in (reference, restored, rebuilt):
         run_hierarchy(task, evaluate_batch, search)
     for search in (restored, rebuilt):
@@ -147,10 +182,10 @@ def test_check_tell_refuses_other_ids():
         search.tell({check.candidate_id: [0.0]})
 
 
-def test_task4_preset_runs_six_structures_up_to_two_fingers_of_three_joints():
+def test_task4_preset_visits_one_and_three_joints_before_growing_a_third_finger():
     task = load_task(ROOT / 'config' / 'tasks' / 'task4.yaml')
     search = HierarchySearch(task)
-    assert search.path == [(1,), (2,), (1, 1), (1, 2), (2, 2), (2, 3)]
+    assert search.path == [(1,), (2,), (1, 1), (1, 2), (3,), (1, 3), (2, 2), (2, 3)]
     assert search.structure_task.structure == (1,)
 
 
@@ -167,9 +202,12 @@ def test_stop_rule_on_real_evaluations_of_task4():
                                HierarchySearch(task, path=[(1,), (2,)]))
         assert search.stop() == expected_stop
         for outcome in search.outcomes:
-            check_task = task.replace(structure=outcome.structure, num_world_states=3)
+            check_task = task.replace(structure=outcome.structure, num_world_states=3,
+                                      held_out=True)
             evaluation = evaluate(outcome.result.x, check_task)
             assert np.array_equal(outcome.check_objectives, evaluation.objectives)
+            training = world_states(task.replace(num_world_states=64))
+            assert not set(world_states(check_task)) & set(training)
             within = (evaluation.objectives[0] <= 0.05 and
                       evaluation.objectives[1] <= orientation_threshold)
             assert outcome.goals_met == bool(within)

@@ -60,11 +60,13 @@ def test_a_hierarchy_checks_each_structure_on_its_evaluation_worlds():
     seen = []
     while not search.stop():
         batch = search.ask()
-        seen.append((search.checking, batch[0].structure, search.batch_task.num_world_states))
+        seen.append((search.checking, batch[0].structure, search.batch_task.num_world_states,
+                     batch[0].held_out))
         size = len(task.objective_names)
         search.tell(objectives(batch, size))
-    assert seen[0] == (False, (1,), 2)
-    assert seen[1] == (True, (1,), task.hierarchy.evaluation_world_states)
-    assert seen[2][:2] == (False, (2,))
+    # the structure is optimized twice, then its best design is checked on held-out worlds
+    assert seen[:2] == [(False, (1,), 2, False)] * 2
+    assert seen[2] == (True, (1,), task.hierarchy.evaluation_world_states, True)
+    assert seen[3][:2] == (False, (2,))
     _, structure = search.best
     assert structure in {entry[1] for entry in seen}

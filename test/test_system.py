@@ -312,7 +312,8 @@ def test_hierarchy_task_searches_structures_bottom_up(tmp_path):
     checks = summaries_table.select(summaries_table['check'])
     structures = [tuple(structure) for structure in checks['structure']]
     assert structures[:3] == [(1,), (2,), (1, 1)]
-    assert 'structure [1]: best design on the evaluation worlds' in output
+    assert 'structure [1] (optimized with seeds ' in output
+    assert 'best design on the held-out worlds' in output
     result = json.loads((bag / 'result.json').read_text())
     assert tuple(result['structure']) in structures
 

@@ -77,17 +77,19 @@ class RunInfo:
     stamp: int          # ns since the epoch, from the message
     log_time: int       # ns since the epoch, when the recorder received it
 
-    def task(self, structure=None, source='bag:run_info', world_states=None, horizon=None):
+    def task(self, structure=None, source='bag:run_info', world_states=None, horizon=None,
+             stage=0, held_out=False):
         """
         Return the Task the run used: its task text with the run's overrides applied.
 
         `structure` and `world_states` (e.g. a hierarchy check's) replace the run's;
-        `horizon` is a candidate's sub-problem (Candidate.horizon).
+        `horizon` is a candidate's sub-problem (Candidate.horizon); `stage` and `held_out` its
+        stage and world stream (Candidate.stage, Candidate.held_out_worlds).
         """
         return run_task(self.task_yaml, source=source, seed=self.seed,
                         iterations=self.iterations, population=self.population,
                         world_states=world_states or self.world_states, structure=structure,
-                        horizon=horizon)
+                        horizon=horizon, stage=stage, held_out=held_out)
 
 
 class Table:

@@ -78,12 +78,13 @@ def require_run_info(record, purpose):
     return record.run_info
 
 
-def run_task_of(record, structure=None, world_states=None, horizon=None):
-    """Return the Task of the run (for `structure`, `world_states`, `horizon` when given)."""
+def run_task_of(record, structure=None, world_states=None, horizon=None, stage=0,
+                held_out=False):
+    """Return the Task of the run (for `structure`, `world_states`, ... when given)."""
     info = require_run_info(record, 'rebuilding the task')
     try:
         return info.task(structure, f'{record.path} (RunInfo.task_yaml)', world_states,
-                         horizon)
+                         horizon, stage, held_out)
     except (TaskError, ValueError) as error:
         raise UserError(f'{record.path}: the task recorded in the bag cannot be rebuilt: '
                         f'{error}') from None
@@ -285,6 +286,8 @@ class RecordedDesign:
     fitness: float
     world_objectives: np.ndarray  # (worlds, objectives), or None
     evaluator_id: str
+    stage: int = 0               # of a two-stage task (core.stages); 0: one stage, older bags
+    held_out: bool = False       # evaluated on the held-out worlds (a hierarchy check)
 
 
 def recorded_design(record, candidate_id):
@@ -321,6 +324,8 @@ def recorded_design(record, candidate_id):
         structure=tuple(int(joints) for joints in candidate['structure']),
         world_states=int(candidate.get('world_states', 0) or 0),
         horizon=float(candidate.get('horizon', 0.0) or 0.0),
+        stage=int(candidate.get('stage', 0) or 0),
+        held_out=bool(candidate.get('held_out_worlds', False)),
         x=np.asarray(candidate['genome'], dtype=float),
         genome_names=tuple(candidate['genome_names']), objective_names=names,
         objectives=objectives, fitness=fitness, world_objectives=world_objectives,
@@ -330,7 +335,7 @@ def recorded_design(record, candidate_id):
 def design_task(record, design):
     """Return the Task with which a RecordedDesign was evaluated."""
     return run_task_of(record, design.structure or None, design.world_states or None,
-                       design.horizon or None)
+                       design.horizon or None, design.stage, design.held_out)
 
 
 def last_summary(record):
@@ -418,6 +423,26 @@ def _hierarchy_best(record):
         return None
     best = search.best
     return None if best is None else int(best[0].candidate_id)
+
+
+def structure_bests(record):
+    """
+    Return [(structure, candidate id)] of every structure a hierarchical run checked, in order.
+
+    Each is the structure's best design (the better of its optimizations), as the search
+    replayed from the bag finds it; [] for a run without a hierarchy.
+    """
+    task = run_task_of(record)
+    if task.hierarchy is None:
+        return []
+    search = Search(task)
+    try:
+        replay(search, recorded_evaluations(record))
+    except OptimizerError as error:
+        raise UserError(f'{record.path}: the recorded hierarchy run disagrees with a fresh '
+                        f'search of its task and seed: {error}') from None
+    return [(outcome.structure, int(outcome.result.candidate_id))
+            for outcome in search.outcomes]
 
 
 def ranked_candidate_id(record, generation=None, rank=0):

@@ -133,6 +133,7 @@ class Generations:
         self.source = source                # 'summaries' or 'evaluations'
         self.rows = rows                    # the GenerationSummary rows, when from summaries
         self.horizons = np.zeros(len(generations))  # s, of a staged search (0: none)
+        self.stages = np.zeros(len(generations), dtype=int)  # of a two-stage task (0: none)
 
     def __len__(self):
         return len(self.generations)
@@ -142,6 +143,9 @@ def _structure_tuples(column, count):
     if count == 0:
         return []
     return [tuple(int(joints) for joints in column[index]) for index in range(count)]
+
+
+STAGE_WORLDS = {1: 'the nominal world only', 2: 'the randomized worlds'}
 
 
 def generations_from_summaries(record, num_objectives):
@@ -170,7 +174,22 @@ def generations_from_summaries(record, num_objectives):
         np.asarray(summaries['wall_time'], dtype=float)[rows], 'summaries', rows)
     if 'horizon' in summaries:  # older bags have no horizon
         generations.horizons = np.asarray(summaries['horizon'], dtype=float)[rows]
+    generations.stages = _stages_of(record, summaries, rows)
     return generations
+
+
+def _stages_of(record, summaries, rows):
+    """Return the stage of each summary row: that of its told candidates (0: one stage)."""
+    candidates = record.candidates
+    if not len(candidates) or 'stage' not in candidates or 'told_ids' not in summaries:
+        return np.zeros(len(rows), dtype=int)
+    stage_of = dict(zip(np.asarray(candidates['candidate_id']).tolist(),
+                        np.asarray(candidates['stage']).tolist()))
+    stages = []
+    for row in rows:
+        told = np.asarray(summaries['told_ids'][row]).ravel().tolist()
+        stages.append(int(stage_of.get(told[0], 0)) if told else 0)
+    return np.asarray(stages, dtype=int)
 
 
 def generations_from_evaluations(rows, weights):
@@ -366,7 +385,8 @@ class Report:
                   + [f'best_{name}' for name in self.names]
                   + [f'median_{name}' for name in self.names]
                   + ['best_fitness_so_far', 'evaluations', 'wall_time']
-                  + (['horizon'] if generations.horizons.any() else []))
+                  + (['horizon'] if generations.horizons.any() else [])
+                  + (['stage'] if generations.stages.any() else []))
         columns = [['x'.join(str(j) for j in structure) for structure in generations.structures],
                    _int_texts(generations.generations)]
         columns += [_float_texts(generations.best[:, i]) for i in range(len(self.names))]
@@ -377,6 +397,8 @@ class Report:
                     _float_texts(generations.wall_time)]
         if generations.horizons.any():
             columns.append(_float_texts(generations.horizons))
+        if generations.stages.any():
+            columns.append(_int_texts(generations.stages))
         write_csv(path, header, columns)
 
     def write_front_csv(self, path):
@@ -415,7 +437,9 @@ class Report:
         lines = ['## Best design', '']
         if design is None:
             return lines + ['No design was evaluated successfully.']
-        lines.append(f'Candidate {design.candidate_id} of generation {design.generation}, '
+        stage = (f' of stage {design.stage} ({STAGE_WORLDS[design.stage]})'
+                 if design.stage else '')
+        lines.append(f'Candidate {design.candidate_id} of generation {design.generation}{stage}, '
                      f'structure {list(design.structure)}, evaluated by '
                      f'{design.evaluator_id or "(no evaluation in the bag)"}'
                      + (f' up to the horizon {design.horizon:g} s (its objectives are those of '

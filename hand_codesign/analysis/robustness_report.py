@@ -14,6 +14,13 @@ Evaluates the run's best design on many world states with `core.robustness` on P
 - `robustness.png`: the paper's Fig. 3 for this design: the distribution of the initial and
   the final errors, as a scatter of position against orientation error and as box plots.
 
+For a hierarchy run (Fig. 3 per structure), every structure the run checked has its best design
+(the better of its optimizations, as the search replayed from the bag finds it) evaluated on
+the same worlds: DIR gets one folder per structure (`structure_1_3/` with worlds.csv and
+percentiles.csv), `structures.csv` (per structure the median, p95 and mean of the four errors)
+and `structures.png`, the initial and final error distributions of every structure side by
+side.
+
 World states: when N is v ** k for the k quantities the task randomizes (default 15,625 =
 5 ** 6, the paper's), the grid of v evenly spaced values per quantity, all combinations
 (`core.worlds.grid_world_states`); otherwise N worlds drawn uniformly from the task's ranges
@@ -47,25 +54,70 @@ def robustness_command(arguments):
     if workers < 1:
         raise UserError(f'--workers: expected 1 or more processes, got {workers}')
     record = records.open_run(arguments.bag)
+    out = (pathlib.Path(arguments.out) if arguments.out
+           else default_output_dir(record.path))
+    bests = records.structure_bests(record)
+    if bests:
+        return structures_command(record, bests, arguments.samples, workers, out)
     design = records.recorded_design(record, records.best_candidate_id(record))
     task = records.run_task_of(record, design.structure or None)
     worlds, how = robustness_worlds(task, arguments.samples)
-    out = (pathlib.Path(arguments.out) if arguments.out
-           else default_output_dir(record.path))
     print(f'evaluating candidate {design.candidate_id} (generation {design.generation}, '
           f'structure {list(design.structure)}) on {len(worlds)} world states ({how}) with '
           f'{workers} processes')
-    started = time.perf_counter()
-    report = evaluate_robustness(design.x, task, worlds=worlds, processes=workers,
-                                 chunk_size=chunk_size(len(worlds), workers))
-    seconds = time.perf_counter() - started
-    print(f'{len(worlds)} worlds in {seconds:.1f} s ({len(worlds) / seconds:.1f} worlds/s)')
+    report = timed_robustness(design.x, task, worlds, workers)
     paths = write_report(out, report, f'{task.name}, candidate {design.candidate_id}')
     print(percentile_table(report))
     print(f'collisions at the start: {int(np.sum(report.collisions))} of {report.size} '
           'worlds')
     print(f'robustness: {out} ({", ".join(path.name for path in paths)})')
     return 0
+
+
+def timed_robustness(x, task, worlds, workers):
+    """Evaluate one design on the worlds with `workers` processes; print the rate."""
+    started = time.perf_counter()
+    report = evaluate_robustness(x, task, worlds=worlds, processes=workers,
+                                 chunk_size=chunk_size(len(worlds), workers))
+    seconds = time.perf_counter() - started
+    print(f'{len(worlds)} worlds in {seconds:.1f} s ({len(worlds) / seconds:.1f} worlds/s)')
+    return report
+
+
+def structures_command(record, bests, samples, workers, out):
+    """Fig. 3 per structure: each structure's best design on the same worlds, side by side."""
+    reports = []
+    for structure, candidate_id in bests:
+        design = records.recorded_design(record, candidate_id)
+        task = records.run_task_of(record, structure)
+        worlds, how = robustness_worlds(task, samples)
+        print(f'structure {list(structure)}: evaluating its best design, candidate '
+              f'{candidate_id}, on {len(worlds)} world states ({how}) with {workers} processes')
+        report = timed_robustness(design.x, task, worlds, workers)
+        folder = out / ('structure_' + '_'.join(str(joints) for joints in structure))
+        write_tables(folder, report)
+        print(percentile_table(report))
+        reports.append((structure, candidate_id, report))
+    summary_path = out / 'structures.csv'
+    write_structures_csv(summary_path, reports)
+    figure_path = out / 'structures.png'
+    plot_structures(figure_path, reports, f'{task.name}, {len(worlds)} world states')
+    print(f'robustness of {len(reports)} structures: {out} ({summary_path.name}, '
+          f'{figure_path.name}, one folder per structure)')
+    return 0
+
+
+def write_structures_csv(path, reports):
+    """Write per structure and error the median, p95 and mean (SI units)."""
+    header = ['structure', 'candidate_id', 'error', 'unit', 'p50', 'p95', 'mean']
+    rows = []
+    for structure, candidate_id, report in reports:
+        for when, quantity, unit, values in percentile_rows(report):
+            rows.append([' '.join(str(joints) for joints in structure), str(candidate_id),
+                         f'{when}_{quantity}', unit,
+                         repr(float(values[PERCENTILES.index(50)])),
+                         repr(float(values[PERCENTILES.index(95)])), repr(float(values[-2]))])
+    write_csv(path, header, [list(column) for column in zip(*rows)])
 
 
 def available_cores():
@@ -132,6 +184,14 @@ def percentile_table(report):
 
 def write_report(out, report, title):
     """Write worlds.csv, percentiles.csv and robustness.png into out; return their paths."""
+    paths = write_tables(out, report)
+    figure_path = out / 'robustness.png'
+    plot_robustness(figure_path, report, title)
+    return paths + [figure_path]
+
+
+def write_tables(out, report):
+    """Write worlds.csv and percentiles.csv into out; return their paths."""
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as error:
@@ -146,9 +206,7 @@ def write_report(out, report, title):
     for index in range(len(header) - 2):
         columns.append([repr(float(values[index])) for *_, values in rows])
     write_csv(percentiles_path, header, columns)
-    figure_path = out / 'robustness.png'
-    plot_robustness(figure_path, report, title)
-    return [worlds_path, percentiles_path, figure_path]
+    return [worlds_path, percentiles_path]
 
 
 def plot_robustness(path, report, title):
@@ -186,6 +244,37 @@ def plot_robustness(path, report, title):
         ax.set_title('box: p25-p75, whiskers: p5-p95', fontsize='small')
         ax.grid(True, axis='y', alpha=0.3)
     figure.suptitle(f'robustness of {title} on {report.size} world states', fontsize='medium')
+    figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    pyplot.close(figure)
+
+
+def plot_structures(path, reports, title):
+    """Plot Fig. 3 per structure: initial and final error box plots side by side (mm, deg)."""
+    import matplotlib
+    matplotlib.use('Agg')
+    from matplotlib import pyplot
+    figure, axes = pyplot.subplots(2, 1, figsize=(max(6.0, 1.3 * len(reports) + 2), 7.5),
+                                   sharex=True)
+    positions = np.arange(len(reports)) * 3.0
+    names = [str(list(structure)) for structure, _, _ in reports]
+    for ax, column, scale, label in ((axes[0], 0, 1000.0, 'position error (mm)'),
+                                     (axes[1], 1, 180.0 / np.pi, 'orientation error (deg)')):
+        for offset, when, colour in ((0.0, 'initial', 'tab:grey'), (1.0, 'final', 'tab:blue')):
+            data = [(report.initial_errors if when == 'initial' else report.final_errors)[
+                :, column] * scale for _, _, report in reports]
+            boxes = ax.boxplot(data, positions=positions + offset, widths=0.8,
+                               whis=(5, 95), showfliers=False, patch_artist=True)
+            for box in boxes['boxes']:
+                box.set_facecolor(colour)
+                box.set_alpha(0.6)
+            ax.plot([], [], color=colour, linewidth=6, alpha=0.6, label=when)
+        ax.set_ylabel(label)
+        ax.grid(True, axis='y', alpha=0.3)
+    axes[0].legend(fontsize='small')
+    axes[1].set_xticks(positions + 0.5, names)
+    axes[1].set_xlabel('structure (joints per finger); box: p25-p75, whiskers: p5-p95')
+    figure.suptitle(f'robustness per structure: {title}', fontsize='medium')
     figure.tight_layout()
     figure.savefig(path, dpi=100)
     pyplot.close(figure)

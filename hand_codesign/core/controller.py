@@ -222,6 +222,7 @@ class RunController:
         told_ids = [candidate.candidate_id for candidate in self.batch]
         objectives = np.array([self.results[candidate_id] for candidate_id in told_ids])
         generation, horizon = self.batch[0].generation, self.batch[0].horizon
+        stage = self.batch[0].stage
         self.batch = None
         elapsed = self.clock() - self.started
         summary = generation_summary(
@@ -229,10 +230,13 @@ class RunController:
             optimizer.result, self.told, elapsed, checking, horizon)
         summary['best_design'] = self.best_design(structure, optimizer.result.x)
         summary.update(self.trust_counts(), audited_ids=sorted(self.audits.audited))
+        summary['stage'] = stage  # for the progress line; the candidates carry it
         self.outbox.send_summary(summary)
         if checking:
+            seeds = ', '.join(str(seed) for seed in self.search.outcomes[-1].seeds)
             self.outbox.log(
-                f'structure {list(structure)}: best design on the evaluation worlds: '
+                f'structure {list(structure)} (optimized with seeds {seeds}): best design on '
+                'the held-out worlds: '
                 + ', '.join(f'{name} {value:.4g}'
                             for name, value in zip(self.task.objective_names, objectives[0])))
             return

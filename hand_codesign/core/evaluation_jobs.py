@@ -45,7 +45,16 @@ class EvaluationJob:
 def job_key(candidate):
     """Return the fields of a Candidate that decide its task (with the run's RunInfo)."""
     return (candidate.run_id, tuple(candidate.structure), candidate.world_states,
-            candidate.horizon)
+            candidate.horizon, _stage(candidate), _held_out(candidate))
+
+
+def _stage(candidate):
+    # a Candidate message of a sender older than the field has none: a single-stage task
+    return int(getattr(candidate, 'stage', 0))
+
+
+def _held_out(candidate):
+    return bool(getattr(candidate, 'held_out_worlds', getattr(candidate, 'held_out', False)))
 
 
 def candidate_task(run, candidate):
@@ -53,7 +62,8 @@ def candidate_task(run, candidate):
     try:
         task = run_task(run.task_yaml, f'run {run.run_id} task', run.seed, run.iterations,
                         run.population, candidate.world_states or run.world_states,
-                        tuple(candidate.structure) or None, candidate.horizon)
+                        tuple(candidate.structure) or None, candidate.horizon,
+                        _stage(candidate), _held_out(candidate))
         return task, genome_spec(task)
     except ValueError as error:
         raise CandidateRejected(f'unusable structure or task: {error}')

@@ -14,38 +14,45 @@ Transitions (the edges of Fig. 1) change a structure by one joint with its segme
   ((2,) -> (1, 1), (1, 2) -> (1, 1, 1), (1, 3) -> (2, 2)); a finger left without joints
   disappears.
 
-The bottom-up path (`bottom_up_path`) starts at a configurable structure and repeatedly goes to
-an unvisited neighbour that grows the hand: more joints, or as many joints on more fingers. The
-paper's path keeps the degrees of freedom and the number of optimized parameters increasing and
-prefers rearranging joints to adding new ones; so among the growing neighbours the path takes
+The bottom-up path (`bottom_up_path`) starts at a configurable structure and walks Fig. 1's
+edges, never back to a structure it visited. The paper's text prefers rearranging joints to
+adding new ones and compares structures of as many joints ((2, 2) and (1, 3) in Fig. 3); Fig. 1
+draws only growing edges. Both hold here: from each structure the path takes
 
-1. a move (it keeps the number of joints, i.e. actuators, and adds only the new finger's
-   placement on the palm),
-2. else adding a joint to an existing finger (fewer new parameters than a new finger),
+1. a move of a joint (the same number of joints, i.e. actuators), while one leads to an
+   unvisited structure,
+2. else adding a joint to a finger (the degrees of freedom grow; fewer new parameters than a
+   new finger),
 3. else adding a finger,
 
-and among equals the most balanced structure (smallest longest finger: (2, 2) before (1, 3)),
-then the smallest tuple. Moves between existing fingers ((1, 3) -> (2, 2)) never grow the
-hand, so the path never takes them. Within at most 2 fingers of at most 3 joints, from (1,)::
+and among equals the most balanced structure (smallest longest finger), then the smallest
+tuple. So from each structure every move to an unvisited structure is tried before the hand
+grows. The task's `hierarchy.stop_structure` ends the path and bounds it: at most as many
+fingers, and joints per finger, as the stop structure has (and as max_fingers / max_joints
+allow). Task 4 ("stops when reaching a two-fingered hand with three joints", stop structure
+(2, 3))::
 
-    (1,) -> (2,) -> (1, 1) -> (1, 2) -> (2, 2) -> (2, 3) -> (3, 3)
+    (1,) -> (2,) -> (1, 1) -> (1, 2) -> (3,) -> (1, 3) -> (2, 2) -> (2, 3)
 
-and within 3 fingers of 3 joints::
+Without a stop structure the path ends where no unvisited neighbour is left.
 
-    (1,) -> (2,) -> (1, 1) -> (1, 2) -> (1, 1, 1) -> (1, 1, 2) -> (1, 2, 2) -> (2, 2, 2)
-         -> (2, 2, 3) -> (2, 3, 3) -> (3, 3, 3)
+Three-finger hands (Fig. 3) are grown from the best two-finger hands: when a task gives
+`max_fingers` above the stop structure's fingers, the path is followed by a finger of one joint
+added to each of the `GROWN_FROM` (2) structures of the most fingers on the path whose checks
+scored best (lowest weighted sum, the earlier on ties): for Task 4 e.g. (1, 3) -> (1, 1, 3) and
+(2, 2) -> (1, 2, 2). Which ones is decided from the told objectives only, so replaying them
+(resume, analysis) re-derives it.
 
-The task's `hierarchy.stop_structure` ends the path and bounds it: at most as many fingers, and
-joints per finger, as the stop structure has (and as max_fingers / max_joints allow). Task 4
-("stops when reaching a two-fingered hand with three joints", stop structure (2, 3)) thus runs
-the first path above, six structures.
-
-`HierarchySearch` runs one optimization per structure on that path and, after each, evaluates
-the structure's best design on the task's evaluation world states; it stops as soon as every
-position objective is within `hierarchy.position_threshold` and every orientation objective
-within `hierarchy.orientation_threshold` (each averaged over those worlds, as in equation 5).
-It is driven with ask/tell like an optimizer, so the ROS optimizer node drives it one batch at a
-time; `run_hierarchy` drives it with any callable that evaluates a batch.
+`HierarchySearch` optimizes each structure `REPEATS` (2) times one after the other, as the paper
+does, each optimization with the task's budget and its own seed `derived_seed(run seed,
+structure index, repeat)`; the structure's best design is the better of the two (lowest
+weighted sum on the training worlds, the first on ties). That design is then checked on
+`hierarchy.evaluation_world_states` held-out worlds (core.worlds: another stream of the run's
+seed, disjoint from the training worlds). The search stops as soon as every position objective
+of a check is within `hierarchy.position_threshold` and every orientation objective within
+`hierarchy.orientation_threshold` (each averaged over those worlds, as in equation 5). It is
+driven with ask/tell like an optimizer, so the ROS optimizer node drives it one batch at a time;
+`run_hierarchy` drives it with any callable that evaluates a batch.
 """
 
 import dataclasses
@@ -54,7 +61,8 @@ from typing import Optional, Tuple
 
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.optimizers import (
-    Candidate, make_optimizer, OptimizerError, OptimizerResult, STATE_FORMAT, TellError)
+    Candidate, derived_seed, make_optimizer, OptimizerError, OptimizerResult, STATE_FORMAT,
+    TellError)
 import numpy as np
 
 Structure = Tuple[int, ...]
@@ -62,7 +70,10 @@ Structure = Tuple[int, ...]
 MAX_FINGERS = 3
 MAX_JOINTS = 3
 
-# Preference of the transitions on the bottom-up path (lower first).
+REPEATS = 2  # optimizations of each structure, each with its own seed
+GROWN_FROM = 2  # best structures of the path a finger is added to
+
+# Preference of the transitions on the bottom-up path (lower first); others are not taken.
 _PREFERENCE = {'move joint': 0, 'add joint': 1, 'add finger': 2}
 
 
@@ -147,8 +158,8 @@ def bottom_up_path(start=(1,), stop=None, max_fingers=None, max_joints=None):
 
     The path stays within max_fingers fingers of max_joints joints (default 3 and 3) and, with
     a `stop` structure, within its number of fingers and its longest finger, so that it ends
-    there. Without `stop` it ends where no neighbour grows the hand. Raise HierarchyError when
-    `stop` is not on the path.
+    there. Without `stop` it ends where no move or addition leads to an unvisited structure.
+    Raise HierarchyError when `stop` is not on the path.
     """
     start = normalize_structure(start)
     stop = None if stop is None else normalize_structure(stop)
@@ -162,19 +173,36 @@ def bottom_up_path(start=(1,), stop=None, max_fingers=None, max_joints=None):
     path = [start]
     while path[-1] != stop:
         current = path[-1]
-        growing = [(neighbour, kind) for neighbour, kind in
-                   transitions(current, max_fingers, max_joints).items()
-                   if hierarchy_level(neighbour) > hierarchy_level(current)
-                   and neighbour not in path]
-        if not growing:
+        steps = [(neighbour, kind) for neighbour, kind in
+                 transitions(current, max_fingers, max_joints).items()
+                 if kind in _PREFERENCE and neighbour not in path]
+        if not steps:
             break
-        growing.sort(key=lambda item: (_PREFERENCE[item[1]], max(item[0]), item[0]))
-        path.append(growing[0][0])
+        steps.sort(key=lambda item: (_PREFERENCE[item[1]], max(item[0]), item[0]))
+        path.append(steps[0][0])
     if stop is not None and path[-1] != stop:
         raise HierarchyError(
             f'stop structure {list(stop)} is not on the bottom-up path from {list(start)} within '
             f'{max_fingers} fingers of {max_joints} joints: {[list(s) for s in path]}')
     return path
+
+
+def grows_fingers(hierarchy):
+    """Return True when a hierarchy grows fingers after its path (max_fingers above stop's)."""
+    return (hierarchy.stop_structure is not None and hierarchy.max_fingers is not None
+            and hierarchy.max_fingers > len(hierarchy.stop_structure))
+
+
+def grown_choices(path, max_joints=None):
+    """Return every structure the hierarchy may grow from `path` (a finger of one joint)."""
+    max_joints = MAX_JOINTS if max_joints is None else max_joints
+    most = max(len(structure) for structure in path)
+    choices = []
+    for structure in path:
+        grown = normalize_structure(structure + (1,))
+        if len(structure) == most and max(grown) <= max_joints and grown not in path + choices:
+            choices.append(grown)
+    return choices
 
 
 def goals_within(objective_names, objectives, position_threshold, orientation_threshold):
@@ -191,12 +219,14 @@ class StructureOutcome:
     """One structure's optimization and the check of its best design."""
 
     structure: Structure
-    result: OptimizerResult  # the optimizer's best design
-    stop_reason: dict  # why the structure's optimization stopped
+    result: OptimizerResult  # the better of the optimizations' best designs
+    stop_reason: dict  # why the structure's last optimization stopped
     check_id: int  # candidate id of the check evaluation
-    check_objectives: np.ndarray  # objectives of the best design on the evaluation worlds
+    check_objectives: np.ndarray  # objectives of the best design on the held-out worlds
     check_fitness: float
     goals_met: bool
+    results: Tuple[OptimizerResult, ...] = ()  # each optimization's best design, in order
+    seeds: Tuple[int, ...] = ()  # each optimization's seed, in order
 
 
 class HierarchySearch:
@@ -206,8 +236,9 @@ class HierarchySearch:
     Use like an optimizer: `ask()` returns the candidates to evaluate (each with its
     `structure`), to be evaluated with `evaluation_task` (the task replaced with the current
     structure; for the check of a structure's best design, also with the evaluation world
-    states); `tell()` takes id -> objectives; `stop()` says why the search ended.
-    Candidate ids run on across structures. The state pickles (`get_state` / `from_state`).
+    states, held out); `tell()` takes id -> objectives; `stop()` says why the search ended.
+    Candidate ids run on across structures and repeats. The state pickles (`get_state` /
+    `from_state`).
     """
 
     def __init__(self, task, path=None, first_id=0, genome_size=None):
@@ -215,12 +246,14 @@ class HierarchySearch:
         Prepare the search of `task` (with a `hierarchy` section unless `path` is given).
 
         genome_size(task) -> int gives the genome length of a structure (default: the size of
-        core.genome's GenomeSpec).
+        core.genome's GenomeSpec). A given `path` is visited as it is, without grown
+        structures.
         """
         hierarchy = task.hierarchy
         if hierarchy is None:
             raise HierarchyError(f'task {task.name!r} ({task.source}) has no hierarchy section')
         self.task = task
+        self._grow = path is None and grows_fingers(hierarchy)
         if path is None:
             path = bottom_up_path(hierarchy.start, hierarchy.stop_structure,
                                   hierarchy.max_fingers, hierarchy.max_joints)
@@ -230,6 +263,9 @@ class HierarchySearch:
         self.evaluation_world_states = hierarchy.evaluation_world_states
         self._genome_size = genome_size
         self._index = 0
+        self._repeat = 0
+        self._results = []  # best designs of the current structure's finished optimizations
+        self._seeds = []
         self._outcomes = []
         self._check = None  # the pending check Candidate
         self._stop = {}
@@ -251,7 +287,8 @@ class HierarchySearch:
     def evaluation_task(self):
         """Return the task with which the candidates of `ask()` must be evaluated."""
         if self._check is not None:
-            return self.structure_task.replace(num_world_states=self.evaluation_world_states)
+            return self.structure_task.replace(num_world_states=self.evaluation_world_states,
+                                               held_out=True)
         return self.structure_task
 
     @property
@@ -261,8 +298,13 @@ class HierarchySearch:
 
     @property
     def optimizer(self):
-        """Return the optimizer of the current structure."""
+        """Return the optimizer of the current structure's current optimization."""
         return self._optimizer
+
+    @property
+    def repeat(self):
+        """Return which optimization of the current structure runs (0, 1, ...)."""
+        return self._repeat
 
     def ask(self):
         """Return the candidates to evaluate next (the same ones again until told)."""
@@ -280,7 +322,12 @@ class HierarchySearch:
         if self._check is None:
             self._optimizer.tell(results)
             if self._optimizer.stop():
-                self._ask_check()
+                self._results.append(self._optimizer.result)
+                if len(self._results) < REPEATS:
+                    self._repeat += 1
+                    self._optimizer = self._start_optimizer(self._optimizer.next_id)
+                else:
+                    self._ask_check()
             return
         self._tell_check(results)
 
@@ -340,12 +387,32 @@ class HierarchySearch:
     def _start_optimizer(self, first_id):
         task = self.structure_task
         size = self._genome_size(task) if self._genome_size else genome_spec(task).size
-        return make_optimizer(task, size, first_id=first_id)
+        seed = derived_seed(self.task.seed, self._index, self._repeat)
+        self._seeds.append(seed)
+        return make_optimizer(task, size, first_id=first_id, seed=seed)
+
+    def _best_result(self):
+        return min(self._results, key=lambda result: result.fitness)  # the first on ties
 
     def _ask_check(self):
-        result = self._optimizer.result
+        result = self._best_result()
         self._check = Candidate(self._optimizer.next_id, self._optimizer.generation, result.x,
                                 self.structure)
+
+    def _grown(self):
+        """Return the structures grown from the best outcomes of the most fingers (module doc)."""
+        hierarchy = self.task.hierarchy
+        most = max(len(outcome.structure) for outcome in self._outcomes)
+        ranked = sorted((outcome for outcome in self._outcomes
+                         if len(outcome.structure) == most),
+                        key=lambda outcome: outcome.check_fitness)  # stable: earlier on ties
+        max_joints = MAX_JOINTS if hierarchy.max_joints is None else hierarchy.max_joints
+        grown = []
+        for outcome in ranked[:GROWN_FROM]:
+            structure = normalize_structure(outcome.structure + (1,))
+            if max(structure) <= max_joints and structure not in self.path + grown:
+                grown.append(structure)
+        return grown
 
     def _tell_check(self, results):
         check_id = self._check.candidate_id
@@ -368,9 +435,14 @@ class HierarchySearch:
         met = goals_within(self.task.objective_names, objectives, self.position_threshold,
                            self.orientation_threshold)
         self._outcomes.append(StructureOutcome(
-            self.structure, self._optimizer.result, self._optimizer.stop(), check_id,
-            objectives, self._optimizer.fitness_of(objectives), met))
+            self.structure, self._best_result(), self._optimizer.stop(), check_id,
+            objectives, self._optimizer.fitness_of(objectives), met, tuple(self._results),
+            tuple(self._seeds)))
         self._check = None
+        self._results, self._seeds, self._repeat = [], [], 0
+        if not met and self._grow and self._index + 1 >= len(self.path):
+            self._grow = False
+            self.path = self.path + self._grown()
         if met:
             self._stop = {'goals_met': self.structure}
         elif self._index + 1 >= len(self.path):
@@ -402,7 +474,8 @@ def evaluate_candidates(task, candidates):
 
 
 __all__ = [
-    'all_structures', 'bottom_up_path', 'evaluate_candidates', 'goals_within', 'HierarchyError',
+    'all_structures', 'bottom_up_path', 'evaluate_candidates', 'goals_within', 'GROWN_FROM',
+    'grown_choices', 'grows_fingers', 'HierarchyError', 'REPEATS',
     'HierarchySearch', 'hierarchy_level', 'normalize_structure', 'run_hierarchy',
     'StructureOutcome', 'transitions',
 ]

@@ -69,11 +69,13 @@ class Horizon:
         self.history = []  # the horizon of every generation told, in order
         self._tasks = {}
 
-    def task_at(self, horizon):
-        """Return the task evaluating the sub-problem of `horizon` (cached)."""
-        task = self._tasks.get(horizon)
+    def task_at(self, horizon, base=None):
+        """Return the task (`base`'s, default the task's) of the sub-problem `horizon` (cached)."""
+        base = self.task if base is None else base
+        key = (horizon, base.stage)
+        task = self._tasks.get(key)
         if task is None:
-            task = self._tasks[horizon] = self.task.replace(horizon=horizon)
+            task = self._tasks[key] = base.replace(horizon=horizon)
         return task
 
     @property

@@ -75,6 +75,8 @@ class Candidate:
     x: np.ndarray
     structure: tuple = ()  # joints per finger; set by the hierarchy, () for a single structure
     horizon: float = 0.0  # s, the sub-problem it is evaluated on (core.horizon); 0: none
+    stage: int = 0  # of a two-stage task (core.stages): 1 nominal world, 2 randomized; 0: none
+    held_out: bool = False  # evaluated on the held-out worlds (a hierarchy structure's check)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -97,6 +99,12 @@ class OptimizerResult:
     pareto_ids: tuple = ()
     pareto_x: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 0)))
     pareto_objectives: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 0)))
+
+
+def derived_seed(seed, *path):
+    """Return the seed of one part of a run from the run's seed and the part's indices."""
+    words = [int(seed)] + [int(part) for part in path]
+    return int(np.random.SeedSequence(words).generate_state(1)[0])
 
 
 def library_seed(seed):
@@ -531,25 +539,26 @@ def closest_to_zero(objectives):
     return int(np.argmin(np.linalg.norm(normalized, axis=1)))
 
 
-def make_optimizer(task, dim, first_id=0, seed_x=None):
+def make_optimizer(task, dim, first_id=0, seed_x=None, seed=None):
     """
     Return the optimizer of task.algorithm for a genome of `dim` normalized values.
 
     It takes population, iteration budget, objective weights, initial step size and seed from
     the task. It starts at `seed_x` if given, else at the task's seed design (seeded search,
     Tasks 1 and 2: the normalized genome of `task.seed_design`), else at the centre of the
-    bounds.
+    bounds. `seed` replaces task.seed as the optimizer's seed (the worlds keep task.seed).
     """
     classes = {'cma': CmaEs, 'mocma': MoCmaEs}
     if task.algorithm not in classes:
         raise OptimizerError(
             f'task {task.name!r}: algorithm must be one of {sorted(classes)}, got '
             f'{task.algorithm!r}')
-    seed = task.seed_design
-    if seed_x is None and seed is not None and seed.hand.structure == tuple(task.structure):
+    design = task.seed_design
+    if seed_x is None and design is not None and design.hand.structure == tuple(task.structure):
         seed_x = seed_genome(task)
     return classes[task.algorithm](
-        dim, task.objective_weights, task.population, task.iterations, task.seed,
+        dim, task.objective_weights, task.population, task.iterations,
+        task.seed if seed is None else seed,
         first_id=first_id, x0=seed_x, sigma0=task.initial_sigma)
 
 
@@ -619,6 +628,6 @@ def _same_np_state(first, second):
 
 __all__ = [
     'AskTellOptimizer', 'Candidate', 'CmaEs', 'MoCmaEs', 'OptimizerError', 'OptimizerResult',
-    'ReplayError', 'SIGMA0', 'TellError', 'closest_to_zero', 'least_hypervolume_contributor',
-    'library_seed', 'make_optimizer', 'non_dominated', 'replay',
+    'ReplayError', 'SIGMA0', 'TellError', 'closest_to_zero', 'derived_seed',
+    'least_hypervolume_contributor', 'library_seed', 'make_optimizer', 'non_dominated', 'replay',
 ]

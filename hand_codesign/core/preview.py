@@ -14,12 +14,18 @@ mapping of plain lists, numbers and strings, ready for JSON::
                         orientation or None, objectives}] in world coordinates, and `samples`:
                         every goal sample a trajectory objective scores, also in world
                         coordinates
-    hierarchy           the structures a hierarchy search visits, e.g. [[1], [2], [1, 1]];
-                        [] for a fixed structure
+    hierarchy           the structures a hierarchy search may visit, e.g. [[1], [2], [1, 1]],
+                        in order: its path, then the structures it may grow a finger to
+                        ([1, 1, 3]); [] for a fixed structure
+    hierarchy_grown     {count, choices}: of the grown structures (`choices`, the end of
+                        `hierarchy`) a run visits `count`, those grown from the best checks
     steps_per_rollout   physics steps of one world's rollout (it ends at the last goal)
     steps_per_evaluation  worlds x steps_per_rollout: one candidate
     budget              algorithm, iterations, population, world states, and per structure and
                         in all the evaluations, rollouts and physics steps the budget allows
+                        (a hierarchy optimizes each structure `repeats` times; a two-stage
+                        task runs stage 1 on the nominal world and stage 2 on its worlds, each
+                        with the whole budget; the total counts the costliest grown ones)
 
 Counts are what the budget allows; a run can do less (`budget.may_end_early` says why): early
 termination and unstable worlds cut rollouts, a design starting in collision is not simulated,
@@ -31,6 +37,10 @@ optimizer that refuses the budget) raise TaskError, HierarchyError or OptimizerE
 
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.hierarchy import bottom_up_path
+from hand_codesign.core.hierarchy import grown_choices
+from hand_codesign.core.hierarchy import GROWN_FROM
+from hand_codesign.core.hierarchy import grows_fingers
+from hand_codesign.core.hierarchy import REPEATS
 from hand_codesign.core.objectives import goal_schedule
 from hand_codesign.core.optimizers import make_optimizer
 from hand_codesign.core.robustness import world_values
@@ -50,8 +60,11 @@ def preview(task):
     """Return what a run of `task` would do as one JSON-ready mapping (see the module doc)."""
     schedule = goal_schedule(task)
     path = hierarchy_path(task)
+    grown = grown_structures(task, path)
     structures = [structure_budget(task, structure, path) for structure in
                   (path or [tuple(task.structure)])]
+    grown_budgets = [dict(structure_budget(task, structure, path), grown=True)
+                     for structure in grown]
     rollout = rollout_steps(task)
     steps_per_evaluation = task.num_world_states * rollout
     return {
@@ -69,12 +82,14 @@ def preview(task):
         'samples_per_second': task.goals.samples_per_second,
         'randomization': randomization(task),
         'worlds': worlds(task, schedule),
-        'hierarchy': [list(structure) for structure in path],
+        'hierarchy': [list(structure) for structure in path + grown],
+        'hierarchy_grown': {'count': min(GROWN_FROM, len(grown)),
+                            'choices': [list(structure) for structure in grown]},
         'steps_per_rollout': rollout,
         'rollout_time': rollout * task.time_step,
         'steps_per_evaluation': steps_per_evaluation,
         'early_termination': early_termination(task),
-        'budget': budget(task, structures),
+        'budget': budget(task, structures, grown_budgets),
     }
 
 
@@ -85,6 +100,13 @@ def hierarchy_path(task):
         return []
     return bottom_up_path(hierarchy.start, hierarchy.stop_structure, hierarchy.max_fingers,
                           hierarchy.max_joints)
+
+
+def grown_structures(task, path):
+    """Return the structures a hierarchy may grow a finger to after its path, or []."""
+    if not path or not grows_fingers(task.hierarchy):
+        return []
+    return grown_choices(path, task.hierarchy.max_joints)
 
 
 def rollout_steps(task):
@@ -110,13 +132,19 @@ def structure_budget(task, structure, path):
     """
     Return the genome and budget of one structure, building its optimizer as a run does.
 
-    A hierarchy's structure also costs the check of its best design on the evaluation worlds.
+    A hierarchy's structure is optimized REPEATS times and costs the check of its best design
+    on the evaluation worlds; a two-stage task's stage 1 evaluates on the nominal world only.
     """
     structure_task = task.replace(structure=tuple(structure)) if path else task
     spec = genome_spec(structure_task)
     optimizer = make_optimizer(structure_task, spec.size)
-    evaluations = structure_task.iterations * structure_task.population
-    rollouts = evaluations * structure_task.num_world_states
+    one = structure_task.iterations * structure_task.population
+    if path:
+        evaluations, rollouts = REPEATS * one, REPEATS * one * structure_task.num_world_states
+    elif task.two_stage:
+        evaluations, rollouts = 2 * one, one * (1 + structure_task.num_world_states)
+    else:
+        evaluations, rollouts = one, one * structure_task.num_world_states
     check_rollouts = task.hierarchy.evaluation_world_states if path else 0
     seeded = optimizer.x0.tolist() != spec.initial_mean().tolist()
     steps = rollout_steps(structure_task)
@@ -132,9 +160,10 @@ def structure_budget(task, structure, path):
     }
 
 
-def budget(task, structures):
+def budget(task, structures, grown=()):
     """Return the budget of the run: per structure and in all, with why a run may do less."""
-    totals = {name: sum(entry[name] for entry in structures)
+    costliest = sorted(grown, key=lambda entry: -entry['physics_steps'])[:GROWN_FROM]
+    totals = {name: sum(entry[name] for entry in list(structures) + costliest)
               for name in ('evaluations', 'rollouts', 'physics_steps')}
     return {
         'algorithm': task.algorithm,
@@ -144,8 +173,10 @@ def budget(task, structures):
         'initial_sigma': task.initial_sigma,
         **totals,
         'simulated_time': totals['physics_steps'] * task.time_step,
+        'repeats': REPEATS if task.hierarchy is not None else 1,
+        'stages': 2 if task.two_stage else 1,
         'structures': [{key: value for key, value in entry.items() if key != 'genome'}
-                       for entry in structures],
+                       for entry in list(structures) + list(grown)],
         'may_end_early': may_end_early(task),
     }
 

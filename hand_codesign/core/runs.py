@@ -15,10 +15,10 @@ VERSIONED_PACKAGES = ['hand_codesign', 'pybullet', 'cma', 'deap', 'numpy']
 
 
 def run_task(task_yaml, source, seed, iterations, population, world_states, structure=None,
-             horizon=None):
+             horizon=None, stage=0, held_out=False):
     """Return the Task of a run from its task text and overrides (0 or None keeps the file's)."""
     return with_overrides(parse_task(task_yaml, source=source), seed, iterations, population,
-                          world_states, structure, horizon)
+                          world_states, structure, horizon, stage, held_out)
 
 
 def load_run_task(path, seed=None, iterations=None, population=None, world_states=None):
@@ -29,11 +29,12 @@ def load_run_task(path, seed=None, iterations=None, population=None, world_state
 
 
 def with_overrides(task, seed, iterations, population, world_states, structure=None,
-                   horizon=None):
+                   horizon=None, stage=0, held_out=False):
     """
     Return task with a run's overrides applied (0 or None keeps the task's value).
 
-    `horizon` (s) is a candidate's sub-problem (Candidate.horizon, core.horizon).
+    `horizon` (s) is a candidate's sub-problem (Candidate.horizon, core.horizon); `stage` and
+    `held_out` are a candidate's stage and world stream (Candidate.stage, held_out_worlds).
     """
     changes = {'seed': int(seed)}
     if iterations:
@@ -46,6 +47,10 @@ def with_overrides(task, seed, iterations, population, world_states, structure=N
         changes['structure'] = tuple(int(joints) for joints in structure)
     if horizon:
         changes['horizon'] = float(horizon)
+    if stage:
+        changes['stage'] = int(stage)
+    if held_out:
+        changes['held_out'] = True
     return task.replace(**changes)
 
 

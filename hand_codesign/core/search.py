@@ -6,7 +6,10 @@ The optimizer node, resume and analysis see every task the same way through `Sea
 structure and, for the check of a structure's best design, the hierarchy's evaluation world
 states), `tell()` takes id -> objectives, `stop()` says why it ended. With
 early_termination.horizon the batch task also holds the sub-problem's horizon (core.horizon),
-which grows from what `tell()` was told and which every candidate of the batch carries.
+which grows from what `tell()` was told and which every candidate of the batch carries. A
+task with `two_stage` runs core.stages.StagedSearch: each candidate also carries its stage, and
+the horizon carries on from stage 1 into stage 2 (stage 2 starts at stage 1's design, which
+tracks the goals up to that horizon on the nominal world).
 """
 
 import dataclasses
@@ -15,6 +18,7 @@ from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.hierarchy import HierarchySearch
 from hand_codesign.core.horizon import Horizon
 from hand_codesign.core.optimizers import make_optimizer
+from hand_codesign.core.stages import StagedSearch
 
 
 class Search:
@@ -24,6 +28,8 @@ class Search:
         self.task = task
         if task.hierarchy is not None:
             self._driver = HierarchySearch(task, first_id=first_id)
+        elif task.two_stage:
+            self._driver = StagedSearch(task, first_id=first_id)
         else:
             self._driver = make_optimizer(task, genome_spec(task).size, first_id=first_id)
         early = task.early_termination
@@ -36,9 +42,18 @@ class Search:
         return isinstance(self._driver, HierarchySearch)
 
     @property
+    def staged(self):
+        return isinstance(self._driver, StagedSearch)
+
+    @property
+    def stage(self):
+        """Return the stage of the batch of `ask()` (0 for a single-stage task)."""
+        return self._driver.stage if self.staged else 0
+
+    @property
     def optimizer(self):
-        """Return the optimizer of the structure being searched."""
-        return self._driver.optimizer if self.hierarchical else self._driver
+        """Return the optimizer of the structure (or stage) being searched."""
+        return self._driver.optimizer if self.hierarchical or self.staged else self._driver
 
     @property
     def checking(self):
@@ -48,6 +63,10 @@ class Search:
     @property
     def batch_task(self):
         """Return the task with which the batch of `ask()` is evaluated."""
+        if self.staged:
+            task = self._driver.evaluation_task
+            return task if self._horizon is None else self._horizon.task_at(
+                self._horizon.current, task)
         if self._horizon is not None:
             return self._horizon.batch_task
         return self._driver.evaluation_task if self.hierarchical else self.task
@@ -72,9 +91,11 @@ class Search:
     def ask(self):
         """Return the next batch, each candidate with its structure (the same until told)."""
         if self._batch is None:
-            structure = self.batch_task.structure
+            task = self.batch_task
             horizon = self.horizon or 0.0
-            self._batch = [dataclasses.replace(candidate, structure=structure, horizon=horizon)
+            self._batch = [dataclasses.replace(candidate, structure=task.structure,
+                                               horizon=horizon, stage=task.stage,
+                                               held_out=task.held_out)
                            for candidate in self._driver.ask()]
         return list(self._batch)
 
@@ -89,6 +110,11 @@ class Search:
 
     def stop(self):
         return self._driver.stop()
+
+    @property
+    def outcomes(self):
+        """Return the hierarchy's StructureOutcomes so far (empty without a hierarchy)."""
+        return self._driver.outcomes if self.hierarchical else []
 
     @property
     def best(self):

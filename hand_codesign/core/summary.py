@@ -45,6 +45,7 @@ def progress_line(summary, iterations, rate, seconds_left):
     structure = 'x'.join(str(joints) for joints in summary['structure'])
     if summary.get('horizon'):
         structure += f', horizon {summary["horizon"]:g} s'
-    return (f'generation {summary["generation"] + 1}/{iterations} [{structure}] | '
+    stage = f' of stage {summary["stage"]}' if summary.get('stage') else ''
+    return (f'generation {summary["generation"] + 1}/{iterations}{stage} [{structure}] | '
             f'{summary["evaluations"]} evaluations, {rate:.1f}/s | best fitness '
             f'{summary["best_fitness"]:.4g} ({best}) | about {seconds_left:.0f} s left')

@@ -93,6 +93,8 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
       evaluation_world_states: 64    # worlds the best design of each structure is tested on
     seed_design: task1_seed.yaml     # optional: a starting design (seeded search, Tasks 1/2),
                                      # inline or a file path relative to this task file
+    two_stage: true                  # optional: stage 1 on the nominal world only, then stage 2
+                                     # on the randomized worlds from stage 1's result (Tasks 1/2)
 
 A position goal's `axes` (optional, default [x, y, z]) names the world axes its distance
 measures: [x, y] scores an object on the plane by where it is on the plane, whatever height its

@@ -53,6 +53,16 @@ def check_task(task):
     if task.hierarchy is not None:
         _check_hierarchy(task.hierarchy, fail)
     _check_horizon(task, fail)
+    _check_stages(task, fail)
+
+
+def _check_stages(task, fail):
+    if task.two_stage and task.hierarchy is not None:
+        fail('two_stage', 'no two stages in a task with a hierarchy (not supported: its '
+             'structures are compared on the randomized worlds)')
+    if task.stage not in ((0, 1, 2) if task.two_stage else (0,)):
+        fail('stage', f'{"0, 1 or 2" if task.two_stage else "0 (two_stage is off)"}, got '
+             f'{task.stage!r}')
 
 
 def _check_object(task, fail):

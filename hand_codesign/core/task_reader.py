@@ -167,7 +167,7 @@ class _Reader:
             'name', 'seed', 'time_step', 'duration', 'object', 'hand', 'goals',
             'randomization', 'num_world_states', 'morphology', 'policy', 'optimizer'),
             optional=('description', 'torque_penalty', 'early_termination', 'weights',
-                      'hierarchy', 'seed_design'))
+                      'hierarchy', 'seed_design', 'two_stage'))
         hierarchy = (self.hierarchy(top['hierarchy'], 'hierarchy')
                      if top.get('hierarchy') is not None else None)
         hand, structure = self.hand(top['hand'], 'hand', hierarchy)
@@ -205,7 +205,8 @@ class _Reader:
             early_termination=self.early_termination(top.get('early_termination'),
                                                      'early_termination'),
             hierarchy=hierarchy,
-            seed_design=seed_design)
+            seed_design=seed_design,
+            two_stage=self.boolean(top.get('two_stage', False), 'two_stage'))
 
     def object_spec(self, value, key):
         section = self.mapping(value, key, required=(

@@ -264,6 +264,15 @@ class Task:
     # Not in the YAML: the horizon (s) of the sub-problem a candidate is evaluated on, set by
     # the search (hand_codesign.core.horizon) and carried in its Candidate message; None: none.
     horizon: Optional[float] = None
+    # YAML `two_stage: true`: stage 1 optimizes on the nominal world only, stage 2 with the
+    # randomization, starting from stage 1's result (core.stages).
+    two_stage: bool = False
+    # Not in the YAML, set by the search and carried in the Candidate message like `horizon`:
+    # the stage a candidate belongs to (0: a single-stage task; 1: the nominal world only; 2:
+    # the randomized worlds), and held_out: the worlds are drawn from the held-out stream
+    # (core.worlds), disjoint from the training worlds, for a hierarchy structure's check.
+    stage: int = 0
+    held_out: bool = False
     description: str = ''
     source: str = '<task>'
     source_text: str = ''

@@ -18,6 +18,8 @@ from hand_codesign.core.rotations import axis_angle_quaternion, quaternion_multi
 from hand_codesign.core.task import resting_height, Task
 import numpy as np
 
+HELD_OUT_STREAM = 1  # second entropy word of the held-out worlds' generator
+
 QUANTITIES = ('position_x', 'position_y', 'position_z', 'orientation', 'friction', 'scale',
               'mass')
 
@@ -61,9 +63,19 @@ def _ranges(task: Task):
 
 
 def world_states(task: Task, count=None) -> List[WorldState]:
-    """Return the task's worlds (num_world_states or `count`), uniform in the ranges, seeded."""
+    """
+    Return the task's worlds (num_world_states or `count`), uniform in the ranges, seeded.
+
+    Stage 1 of a two-stage task has the nominal world only. With task.held_out the draws come
+    from another stream of the same seed, independent of the training worlds: no held-out
+    world repeats a training world (the draws are continuous), so a check on them measures
+    how a design does on worlds it was not optimized on.
+    """
+    if task.stage == 1:
+        return [WorldState.nominal()]
     count = task.num_world_states if count is None else int(count)
-    generator = np.random.default_rng(task.seed)
+    generator = np.random.default_rng([task.seed, HELD_OUT_STREAM] if task.held_out
+                                      else task.seed)
     uniform = generator.random((count, len(QUANTITIES)))
     lower = np.array([bounds.lower for bounds in _ranges(task)])
     width = np.array([bounds.width for bounds in _ranges(task)])

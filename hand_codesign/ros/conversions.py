@@ -40,7 +40,9 @@ def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, 
         evaluator_id=evaluator_id, attempt=int(attempt),
         structure=[int(joints) for joints in structure], genome=float_list(candidate.x),
         horizon=float(getattr(candidate, 'horizon', 0.0)),
-        genome_names=list(genome_names), world_states=int(world_states))
+        genome_names=list(genome_names), world_states=int(world_states),
+        stage=int(getattr(candidate, 'stage', 0)),
+        held_out_worlds=bool(getattr(candidate, 'held_out', False)))
     if design is not None:
         message.design_names = list(design.names)
         message.design_values = list(design.values)
