@@ -128,6 +128,8 @@ def test_resting_on_a_limit_while_touching_matches_the_final_state():
     assert seen == {True, False}, 'the sample should hold designs of both kinds'
 
 
+# 20 generations: long enough that the run is still going when the test, having seen its
+# first generation in the bag (flushed every second), interrupts it
 TINY = """
     import sys
     from hand_codesign.cli import main
@@ -138,7 +140,7 @@ TINY = """
         'tiny', 'two small Task 5 runs',
         (Configuration('torque-cma-2w', 'task5.yaml', 'cma', 2, 'torque'),
          Configuration('torque-mocma-16w', 'task5.yaml', 'mocma', 16, 'torque')),
-        Tolerance('plane', 0.005), {'smoke': Budget('smoke', 8, 4, 12, 1)})
+        Tolerance('plane', 0.005), {'smoke': Budget('smoke', 20, 4, 12, 1)})
     sys.exit(main(['reproduce', 'tiny', '--budget', 'smoke', '--evaluators', '1',
                    '--out', sys.argv[1]]))
 """

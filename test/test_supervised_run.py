@@ -269,15 +269,19 @@ def hosts(tmp_path):
         test_hosts.destroy()
 
 
-def evaluator_on(hosts, host, evaluator_id, server, domain, log):
+def evaluator_on(hosts, host, key_file, server, domain, log):
     """Start an evaluator on a test host that finds the run through the discovery server."""
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain), ROS_DISCOVERY_SERVER=server,
                ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET')
     return subprocess.Popen(
         hosts.on(host) + [sys.executable, '-m', 'hand_codesign.ros.evaluator_node',
-                          '--ros-args', '-p', f'evaluator_id:={evaluator_id}',
+                          '--ros-args', '-p', f'key_file:={key_file}',
                           '-p', 'subscribers_expected:=2'],
         env=env, stdout=log, stderr=subprocess.STDOUT)
+
+
+def written(path):
+    return path.exists() and path.stat().st_size > 0
 
 
 def test_host_b_joins_through_the_discovery_server_then_its_link_is_cut(
@@ -285,16 +289,21 @@ def test_host_b_joins_through_the_discovery_server_then_its_link_is_cut(
     bag, domain, port = tmp_path / 'hosts', free_domain(), 11811
     assert not hosts.multicast_reaches_b(), 'the test network carries multicast'
     started = []
+    # each host's evaluator holds the key the run writes for it (outside the bag folder)
+    key_a, key_b = tmp_path / 'host-a.key', tmp_path / 'host-b.key'
     try:
-        with open(tmp_path / 'host-b.log', 'w') as log:
-            started.append(evaluator_on(hosts, hosts.b, 'host-b',
-                                        f'{hosts.address_a}:{port}', domain, log))
         # host A: the run with no evaluator of its own
         run = Watched(bag, 0, host=hosts.on(hosts.a),
-                      extra=['--discovery-server', str(port), '--domain-id', str(domain)])
+                      extra=['--discovery-server', str(port), '--domain-id', str(domain),
+                             '--write-key-file', f'host-a={key_a}',
+                             '--write-key-file', f'host-b={key_b}'])
+        run.wait_for(lambda: written(key_b))
+        with open(tmp_path / 'host-b.log', 'w') as log:
+            started.append(evaluator_on(hosts, hosts.b, key_b, f'{hosts.address_a}:{port}',
+                                        domain, log))
         run.wait_for(lambda: 'generation 1/4' in run.output())
         with open(tmp_path / 'host-a.log', 'w') as log:
-            started.append(evaluator_on(hosts, hosts.a, 'host-a', f'127.0.0.1:{port}',
+            started.append(evaluator_on(hosts, hosts.a, key_a, f'127.0.0.1:{port}',
                                         domain, log))
         hosts.cut_b()
         output = run.finish()

@@ -206,8 +206,11 @@ def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run
         intruder.communicate()
         assert 'in use by another run' in runner.stdout.read()
     keys = secrets_of(runner, time.monotonic() + 60)
-    command_lines = {' '.join(process.cmdline()) for process in psutil.process_iter()
-                     if process.pid != os.getpid()}
+    command_lines = set()
+    for process in psutil.process_iter():
+        with contextlib.suppress(psutil.Error):  # a process may end (or be a zombie) meanwhile
+            if process.pid != os.getpid():
+                command_lines.add(' '.join(process.cmdline()))
     output = finish(runner)
     forgeries, errors = intruder.communicate(timeout=120)
     assert intruder.returncode == 0, errors
