@@ -180,3 +180,26 @@ def test_answers_of_an_evaluator_on_probation_wait_for_its_first_audit():
     audits.take(3, 'a', [3.0], True)
     verdict = audits.take(3, 'b', [3.0], True)
     assert verdict.liars == ['liar'] and verdict.redo == [4] and not audits.holding
+
+
+def test_an_audit_no_other_live_evaluator_can_do_is_taken_unaudited():
+    """Evaluator b falls silent after the start: a's answers cannot be audited, yet all end."""
+    task, clock, outbox = task5(population=6), Clock(), Outbox()
+    controller = RunController(task, RUN, outbox, clock=clock, evaluators_expected=2,
+                               audit_fraction=0.1)
+    for evaluator in ('a', 'b'):
+        controller.heard_from(evaluator, 2)
+    controller.tick()
+    size = len(task.objective_names)
+    while outbox.result is None:
+        assert clock.now < 3600.0, 'the run waits without end for an auditor'
+        for candidate, evaluator, _, _, _ in outbox.take():
+            if evaluator == 'a':
+                controller.evaluated(RUN, candidate.candidate_id, 'a',
+                                     objectives_of(candidate.x, size), 0.5)
+        clock.now += 1.0
+        controller.heard_from('a', 2)
+        controller.tick()
+    expected = plain_loop(task).best[0]
+    assert outbox.result['best_candidate_id'] == expected.candidate_id
+    assert any('no other evaluator alive to audit' in text for _, text in outbox.lines)

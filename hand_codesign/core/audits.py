@@ -18,7 +18,10 @@ whether the answer is right. Rules (the RunController applies them to each answe
 - everything a quarantined evaluator returned that is not yet told is evaluated again, by
   others, and nothing it answers later is taken;
 - answers are audited only while another evaluator is alive to do it (a run with a single
-  evaluator has no one to compare with).
+  evaluator has no one to compare with); an audit that no live evaluator may do any more (its
+  auditor died and only the first evaluator is left) is taken with its one answer
+  (`take_unaudited`), with the answers held for that evaluator's probation, so that a run
+  never waits without end for an auditor.
 
 What this buys against an evaluator that lies rarely, after its probation: each lie is
 caught with probability `fraction`, so one that lies k times goes unnoticed with probability
@@ -104,6 +107,25 @@ class Audits:
             self._held.setdefault(evaluator_id, []).append(candidate_id)
             return Verdict()
         return Verdict(value=self._settle_alone(candidate_id))
+
+    def take_unaudited(self, candidate_id):
+        """
+        Settle an audit no live evaluator can do with its one answer; return {id: value}.
+
+        Returns {} when the candidate is not an audit waiting on one answer. The evaluator
+        stays unproven (a later audit may still catch it), but its held answers are released.
+        """
+        answers = self._answers.get(candidate_id, ())
+        if len(answers) != 1:
+            return {}
+        evaluator_id = answers[0][0]
+        released = {candidate_id: self._settle_alone(candidate_id)}
+        self.audited.discard(candidate_id)
+        if self._probation.get(evaluator_id) == candidate_id:
+            del self._probation[evaluator_id]
+            for held in self._held.pop(evaluator_id, []):
+                released[held] = self._settle_alone(held)
+        return released
 
     def _settle_alone(self, candidate_id):
         evaluator_id, objectives = self._answers.pop(candidate_id)[0]

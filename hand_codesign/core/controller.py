@@ -143,6 +143,16 @@ class RunController:
             self._send_again(redone, ())
         self.advance()
 
+    def _take_unauditable(self):
+        """Take the audits whose auditors are all gone with their one answer (core.audits)."""
+        for candidate_id in self.dispatcher.stranded(self.clock()):
+            released = self.audits.take_unaudited(candidate_id)
+            if released:
+                self.dispatcher.withdraw(candidate_id)
+                self.results.update(released)
+                self.outbox.log(f'candidate {candidate_id}: no other evaluator alive to audit '
+                                'it; its answer is taken unaudited', 'warning')
+
     def _send_again(self, candidate_id, exclude):
         candidate = next(c for c in self.batch if c.candidate_id == candidate_id)
         self.dispatcher.add_again(candidate, self.attempts.get(candidate_id, 0), exclude)
@@ -189,6 +199,7 @@ class RunController:
                 self.attempts[candidate.candidate_id] = attempt + 1
                 self.outbox.send_candidate(candidate, evaluator_id, attempt, self.genome_names,
                                            world_states, self._physical(candidate))
+            self._take_unauditable()
             if self.dispatcher.unfinished or self.audits.holding:
                 return
             self._tell_batch()

@@ -93,6 +93,17 @@ class Dispatcher:
         """Return how many added candidates have no accepted evaluation yet."""
         return len(self._pending)
 
+    def stranded(self, now):
+        """Return the queued candidates that every live evaluator is excluded from."""
+        live = set(self.live_evaluators(now))
+        return [candidate_id for candidate_id in self._queue
+                if candidate_id in self._pending and live
+                and live <= self._pending[candidate_id].rejected_by]
+
+    def withdraw(self, candidate_id):
+        """Stop dispatching a queued candidate (settled otherwise)."""
+        self._pending.pop(candidate_id, None)
+
     def live_evaluators(self, now):
         return [evaluator_id for evaluator_id, state in self.evaluators.items()
                 if now - state.last_heard <= self.heartbeat_timeout]
