@@ -73,6 +73,8 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
     early_termination: {distance: 0.02, angle: 0.3}     # optional: eq. (6) d_s, theta_s;
                                                         # checks_per_second: 10 (optional)
     weights: {position: 1.0, orientation: 0.1}          # optional: w_p, w_r of the fitness
+    physics: {solver_iterations: 50, contact_breaking_threshold: 0.02}   # optional: Bullet's
+                                     # settings; these defaults reproduce the paper's runs
     optimizer:
       algorithm: cma                 # cma (weighted sum) | mocma (Pareto front)
       iterations: 100                # generations (per hand structure)
@@ -315,6 +317,20 @@ class EarlyTerminationSpec:
 
 
 @dataclass(frozen=True)
+class PhysicsSpec:
+    """
+    Bullet settings that trade accuracy for speed; the defaults are those of Table I's runs.
+
+    Fewer solver iterations and a shorter contact breaking threshold (Bullet keeps contact
+    points up to that distance apart) make every step cheaper; bench/bench_physics.py measures
+    how much faster and whether the ranking of designs and their robustness stay the same.
+    """
+
+    solver_iterations: int = 50
+    contact_breaking_threshold: float = 0.02  # m
+
+
+@dataclass(frozen=True)
 class WeightsSpec:
     """Weights of the weighted-sum fitness: w_p for positions, w_r for orientations."""
 
@@ -356,6 +372,7 @@ class Task:
     population: int
     initial_sigma: float = 0.1
     weights: WeightsSpec = WeightsSpec()
+    physics: PhysicsSpec = PhysicsSpec()
     torque_penalty: Optional[TorquePenaltySpec] = None
     early_termination: Optional[EarlyTerminationSpec] = None
     hierarchy: Optional[HierarchySpec] = None
@@ -533,7 +550,7 @@ class _Reader:
             'name', 'seed', 'time_step', 'duration', 'object', 'hand', 'goals',
             'randomization', 'num_world_states', 'morphology', 'policy', 'optimizer'),
             optional=('description', 'torque_penalty', 'early_termination', 'weights',
-                      'hierarchy', 'seed_design'))
+                      'hierarchy', 'seed_design', 'physics'))
         hierarchy = (self.hierarchy(top['hierarchy'], 'hierarchy')
                      if top.get('hierarchy') is not None else None)
         hand, structure = self.hand(top['hand'], 'hand', hierarchy)
@@ -567,6 +584,7 @@ class _Reader:
             initial_sigma=self.number(optimizer.get('initial_sigma', 0.1),
                                       'optimizer.initial_sigma', positive=True),
             weights=self.weights(top.get('weights', {}), 'weights'),
+            physics=self.physics(top.get('physics', {}), 'physics'),
             torque_penalty=self.torque_penalty(top.get('torque_penalty'), 'torque_penalty'),
             early_termination=self.early_termination(top.get('early_termination'),
                                                      'early_termination'),
@@ -824,6 +842,18 @@ class _Reader:
                               angle=True),
             checks_per_second=self.number(section.get('checks_per_second', 10.0),
                                           _join(key, 'checks_per_second'), positive=True))
+
+    def physics(self, value, key):
+        section = self.mapping(value, key, optional=('solver_iterations',
+                                                     'contact_breaking_threshold'))
+        default = PhysicsSpec()
+        return PhysicsSpec(
+            solver_iterations=self.integer(section.get('solver_iterations',
+                                                       default.solver_iterations),
+                                           _join(key, 'solver_iterations')),
+            contact_breaking_threshold=self.number(
+                section.get('contact_breaking_threshold', default.contact_breaking_threshold),
+                _join(key, 'contact_breaking_threshold'), positive=True))
 
     def weights(self, value, key):
         section = self.mapping(value, key, optional=('position', 'orientation'))
