@@ -13,7 +13,6 @@ import os
 import sys
 import time
 
-from hand_codesign.analysis.resume import resume_point
 from hand_codesign.core import genome_spec
 from hand_codesign.core.dispatch import Dispatcher
 from hand_codesign.core.dispatch import DispatchError
@@ -65,7 +64,9 @@ class OptimizerNode(Node):
         self.finished = Future()
         self.resumed = None
         if self.param('resume_bag'):
-            # the search replayed from the bag up to the interruption (core.optimizers.replay)
+            # the search replayed from the bag up to the interruption (core.optimizers.replay);
+            # imported here: reading bags is not needed to start a new run
+            from hand_codesign.analysis.resume import resume_point
             self.resumed = resume_point(self.param('resume_bag'))
             self.task = self.resumed.task
             self.search = self.resumed.search

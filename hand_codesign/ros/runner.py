@@ -174,9 +174,13 @@ class System:
                                 **popen)
 
     def run(self, arguments, task):
-        self.start_recorder()
-        logs = self.bag / 'logs'
-        logs.mkdir()
+        # Every process starts at once (their imports and DDS discovery overlap); the
+        # optimizer sends nothing before the recorder and the evaluators have matched.
+        self.recorder = self.node('recorder_node', {'bag_path': self.bag},
+                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        # The recorder creates the bag folder; the logs move into it once it is ready.
+        logs = self.bag.with_name(self.bag.name + '.logs')
+        logs.mkdir(parents=True)
         for index in range(arguments.evaluators):
             log = open(logs / f'evaluator-{index}.log', 'w')
             self.evaluators.append(self.node(
@@ -195,6 +199,8 @@ class System:
                 'world_states': task.num_world_states})
         self.optimizer = self.node('optimizer_node', parameters, stdout=subprocess.PIPE,
                                    stderr=subprocess.STDOUT, text=True)
+        self.wait_for_recorder()
+        logs.rename(self.bag / 'logs')
         relay = threading.Thread(target=self.relay_optimizer, daemon=True)
         relay.start()
         code = self.wait_for_optimizer()
@@ -202,9 +208,7 @@ class System:
         self.stop_all()
         return code
 
-    def start_recorder(self):
-        self.recorder = self.node('recorder_node', {'bag_path': self.bag},
-                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    def wait_for_recorder(self):
         deadline = time.monotonic() + 60.0
         lines = []
         for line in self.recorder.stdout:
