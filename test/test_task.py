@@ -4,6 +4,7 @@ import math
 import pathlib
 
 from hand_codesign.core import genome_spec, load_task, parse_task, Task, TaskError
+from hand_codesign.core.task import PhysicsSpec
 import pytest
 import yaml
 
@@ -59,6 +60,14 @@ def test_table_one_values():
         assert seeded.seed_design.hand.structure == seeded.structure
         assert seeded.seed_design.controller.kind == 'pd'
         assert 'stand-in' in seeded.source_text
+
+
+def test_physics_defaults_are_table_one_and_a_section_overrides_them(tmp_path):
+    assert load_task(TASK5).physics == PhysicsSpec(50, 0.02)
+    document = task5_document()
+    document['physics'] = {'solver_iterations': 5}
+    task = load_task(write_task(tmp_path, document, 'fast.yaml'))
+    assert task.physics == PhysicsSpec(solver_iterations=5, contact_breaking_threshold=0.02)
 
 
 def test_angles_take_pi_expressions():
@@ -143,6 +152,11 @@ BAD_VALUES = [
     ('goals.position', [{'time': 9.0, 'position': [0, 0, 0.02], 'trajectory': False}],
      'expected a time within the duration'),
     ('morphology.friction', {'delta': [-0.1, 0.1]}, 'expected a seed_design'),
+    ('physics', {'solver_iterations': 0}, 'physics.solver_iterations: expected a positive '
+     'integer, got 0'),
+    ('physics', {'contact_breaking_threshold': -0.01}, 'physics.contact_breaking_threshold: '
+     'expected a positive number, got -0.01'),
+    ('physics', {'substeps': 2}, 'physics.substeps: expected no such key'),
 ]
 
 
