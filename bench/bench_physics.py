@@ -2,8 +2,9 @@
 Benchmark and validation of cheaper physics settings (a task's `physics` section) on Task 5.
 
 Measures, in one run:
-- the designs: every candidate of a seeded CMA-ES search on Task 5 (Table I's settings) that
-  is simulated (no start collision), up to --designs of them, with their fitness;
+- the designs: --designs candidates spread evenly over a seeded CMA-ES search on Task 5
+  (Table I's settings, --generations x --popsize), those that are simulated (no start
+  collision), with their fitness;
 - speed: evaluate() with the cheaper settings over a sample of those designs against today's
   reference, bench_core's bare loop (stepping and torques only, Table I's settings), in
   interleaved rounds, best of 3 (target >= 1.6);
@@ -13,8 +14,9 @@ Measures, in one run:
   quantity) under both settings; the median and 90th percentile of the final position error
   must move by less than 5 %.
 
-Usage: python bench/bench_physics.py [--iterations 10] [--solver-iterations 10]
-       [--contact-breaking-threshold 0.005] [--designs 200] [--popsize 16] [--world-states 8]
+Usage: python bench/bench_physics.py [--solver-iterations 5]
+       [--contact-breaking-threshold 0.005] [--designs 200] [--generations 50]
+       [--popsize 16] [--world-states 8]
 """
 
 import argparse
@@ -34,21 +36,27 @@ TASK_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'conf
                          'task5.yaml')
 
 
-def searched_designs(task, count):
-    """Return (genomes, fitness) of the first `count` simulated candidates of a CMA-ES run."""
+def searched_designs(task, generations, count):
+    """
+    Return (genomes, fitness) of `count` simulated candidates spread over a CMA-ES run.
+
+    The run lasts `generations`; candidates that start in collision (not simulated, the same
+    under any physics) are left out, and `count` of the rest are taken evenly over the run.
+    """
     optimizer = make_optimizer(task, genome_spec(task).size)
     genomes, fitness = [], []
-    while len(genomes) < count:
+    for _ in range(generations):
         batch = optimizer.ask()
         results = {}
         for candidate in batch:
             evaluation = evaluate(candidate.x, task)
             results[candidate.candidate_id] = evaluation.objectives
-            if not evaluation.collision and len(genomes) < count:
+            if not evaluation.collision:
                 genomes.append(np.asarray(candidate.x))
                 fitness.append(evaluation.fitness)
         optimizer.tell(results)
-    return genomes, np.array(fitness)
+    chosen = np.linspace(0, len(genomes) - 1, min(count, len(genomes))).round().astype(int)
+    return [genomes[index] for index in chosen], np.array(fitness)[chosen]
 
 
 def spearman(a, b):
@@ -101,9 +109,10 @@ def robustness_change(reference, fast, genomes, fitness, count):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument('--solver-iterations', type=int, default=10)
+    parser.add_argument('--solver-iterations', type=int, default=5)
     parser.add_argument('--contact-breaking-threshold', type=float, default=0.005)
     parser.add_argument('--designs', type=int, default=200)
+    parser.add_argument('--generations', type=int, default=50)
     parser.add_argument('--popsize', type=int, default=16)
     parser.add_argument('--world-states', type=int, default=8)
     parser.add_argument('--speed-sample', type=int, default=16)
@@ -114,14 +123,15 @@ def main():
         iterations=10 ** 6)
     fast = reference.replace(physics=PhysicsSpec(
         arguments.solver_iterations, arguments.contact_breaking_threshold))
-    genomes, fitness = searched_designs(reference, arguments.designs)
+    genomes, fitness = searched_designs(reference, arguments.generations,
+                                        arguments.designs)
     fast_fitness = np.array([evaluate(x, fast).fitness for x in genomes])
     sample = genomes[::max(1, len(genomes) // arguments.speed_sample)][:arguments.speed_sample]
     raw, rate = speed_ratio(reference, fast, sample)
     print(f'Task 5, physics {fast.physics} against the Table I defaults {reference.physics} '
           f'({time.strftime("%H:%M:%S")})')
-    print(f'  {len(genomes)} designs of a CMA-ES run (popsize {arguments.popsize}, '
-          f'{arguments.world_states} worlds), fitness {fitness.min():.4f} to '
+    print(f'  {len(genomes)} designs over a CMA-ES run ({arguments.generations} x '
+          f'{arguments.popsize}, {arguments.world_states} worlds), fitness {fitness.min():.4f} to '
           f'{fitness.max():.4f}')
     print(f'  bare loop, Table I physics      {raw:9.0f} steps/s')
     print(f'  evaluate(), cheaper physics     {rate:9.0f} steps/s')
