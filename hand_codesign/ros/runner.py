@@ -180,7 +180,7 @@ class System:
                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         # The recorder creates the bag folder; the logs move into it once it is ready.
         logs = self.bag.with_name(self.bag.name + '.logs')
-        logs.mkdir(parents=True)
+        logs.mkdir(parents=True, exist_ok=True)
         for index in range(arguments.evaluators):
             log = open(logs / f'evaluator-{index}.log', 'w')
             self.evaluators.append(self.node(
