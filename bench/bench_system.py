@@ -11,8 +11,10 @@ Measures, in one run on the Task 5 scene:
   Audit evaluations (a second evaluator checking an answer, hand_codesign.core.audits) are
   cost, not progress: their steps are not counted, their time is; `--audit-fraction 0` shows
   the rate without them (the first answers of each evaluator are audited unless it is 0).
-Prints the ratio of the 2-evaluator rate to twice the raw rate (target >= 0.85) and of the
-2-evaluator rate to the 1-evaluator rate (target >= 1.8).
+Prints the ratio of the 2-evaluator rate to twice the raw rate (target >= 0.95 at Table I's
+generation size, >= 0.90 at 16 candidates x 8 worlds) and of the 2-evaluator rate to the
+1-evaluator rate (target >= 1.8). The rates are wall-clock rates: other processes on the
+machine lower them (see the load average printed).
 
 The defaults are Table I's Task 5 generation (population 80, 64 world states). Small
 generations cost more: every candidate pays a fixed cost besides stepping (about 5 ms to
@@ -91,12 +93,14 @@ def main():
         bag, two, audits = system_rate(task, 2, arguments, folder)
         raw = raw_rate(task, bag, 24)
     print(f'Task 5, {arguments.iterations} generations x {arguments.popsize} candidates x '
-          f'{arguments.world_states} worlds ({time.strftime("%H:%M:%S")})')
+          f'{arguments.world_states} worlds ({time.strftime("%H:%M:%S")}, load average '
+          f'{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)')
     print(f'  raw single-core stepping (bench_core bare loop)  {raw:9.0f} steps/s')
     print(f'  system, 1 evaluator                               {one:9.0f} steps/s')
     print(f'  system, 2 evaluators                              {two:9.0f} steps/s '
           f'({audits} audit evaluations not counted)')
-    print(f'  2 evaluators / (2 x raw)   {two / (2 * raw):.3f}   (target >= 0.85)')
+    target = 0.95 if arguments.popsize * arguments.world_states >= 80 * 64 else 0.90
+    print(f'  2 evaluators / (2 x raw)   {two / (2 * raw):.3f}   (target >= {target:.2f})')
     print(f'  2 evaluators / 1 evaluator {two / one:.3f}   (target >= 1.8)')
 
 

@@ -1,5 +1,6 @@
 """evaluate(x, task): the contract's Evaluation, pure and bit-identical across processes."""
 
+import hashlib
 import json
 import pathlib
 import subprocess
@@ -7,6 +8,7 @@ import sys
 
 from hand_codesign.core import (evaluate, Evaluation, genome_spec, load_task, objective_names,
                                 world_states)
+from hand_codesign.core.task import PhysicsSpec
 import numpy as np
 import pytest
 
@@ -100,6 +102,40 @@ def test_each_world_is_independent_of_the_others(task):
         alone = evaluate(x, task, worlds=[worlds[index]])
         np.testing.assert_array_equal(alone.world_objectives[0], full.world_objectives[index])
         np.testing.assert_array_equal(alone.final_errors[0], full.final_errors[index])
+
+
+# SHA-256 (first 20 hex digits) of the per-world objectives, final errors and simulated time
+# of Task 5 candidates on 4 worlds, as evaluate() computed them before the physics settings
+# became a task option (commit 76bbde7): Table I's settings must keep them bit for bit.
+EARLIER_DIGESTS = {3: '81f25defe7ab5fcf5d25', 6: 'e638ff1676c430aaf950',
+                   8: 'e2e8012d332df8248c97', 9: 'f254b5313a37827ecdf3'}
+
+
+def digest(result):
+    values = np.concatenate([result.world_objectives.ravel(), result.final_errors.ravel(),
+                             [result.simulated_time]])
+    return hashlib.sha256(values.tobytes()).hexdigest()[:20]
+
+
+def test_table_one_physics_gives_the_earlier_results_bit_for_bit():
+    task = load_task(TASKS / 'task5.yaml').replace(num_world_states=4)
+    spec = genome_spec(task)
+    generator = np.random.default_rng(5)
+    candidates = [spec.initial_mean() + 0.3 * generator.standard_normal(spec.size)
+                  for _ in range(10)]
+    found = {index: digest(evaluate(candidates[index], task)) for index in EARLIER_DIGESTS}
+    assert found == EARLIER_DIGESTS
+
+
+def test_cheaper_physics_changes_results_and_stays_deterministic(task):
+    cheap = task.replace(physics=PhysicsSpec(solver_iterations=5,
+                                             contact_breaking_threshold=0.005))
+    x = genomes(task)[2]
+    first = exact(evaluate(x, cheap))
+    table_one = exact(evaluate(x, task))  # Bullet's contact threshold is process-wide
+    assert exact(evaluate(x, cheap)) == first
+    assert first != table_one
+    assert exact(evaluate(x, task)) == table_one
 
 
 @pytest.mark.parametrize('name', PRESETS)

@@ -345,3 +345,21 @@ def test_asking_stop_often_does_not_change_the_run():
 
     assert generations_until_stop(1) == generations_until_stop(5)
     assert 'tolflatfitness' in generations_until_stop(1)[1]
+
+
+# Imports the optimizers, checks that plotting and statistics were left out, then imports them.
+QUICK_IMPORT = """
+import sys
+from hand_codesign.core import optimizers
+assert 'matplotlib' not in sys.modules and 'scipy' not in sys.modules, 'imported'
+import matplotlib.pyplot
+import scipy.stats
+print(optimizers.cma.__version__, scipy.stats.kendalltau([1, 2, 3], [1, 3, 2])[0])
+"""
+
+
+def test_optimizers_start_without_plotting_and_statistics_which_still_import_afterwards():
+    result = subprocess.run([sys.executable, '-c', QUICK_IMPORT], capture_output=True,
+                            text=True, timeout=120, cwd=ROOT)
+    assert result.returncode == 0, result.stderr
+    assert abs(float(result.stdout.split()[-1]) - 1 / 3) < 1e-12

@@ -4,6 +4,7 @@ import math
 import pathlib
 
 from hand_codesign.core import genome_spec, load_task, parse_task, Task, TaskError
+from hand_codesign.core.task import PhysicsSpec
 import pytest
 import yaml
 
@@ -71,6 +72,14 @@ def test_goal_axes_and_symmetry():
     task1 = load_task(ROOT / 'config' / 'tasks' / 'task1.yaml')
     assert {goal.axes for goal in task1.goals.position} == {('x', 'y', 'z')}  # the default
     assert task1.goals.orientation_symmetry is None
+
+
+def test_physics_defaults_are_table_one_and_a_section_overrides_them(tmp_path):
+    assert load_task(TASK5).physics == PhysicsSpec(50, 0.02)
+    document = task5_document()
+    document['physics'] = {'solver_iterations': 5}
+    task = load_task(write_task(tmp_path, document, 'fast.yaml'))
+    assert task.physics == PhysicsSpec(solver_iterations=5, contact_breaking_threshold=0.02)
 
 
 def test_angles_take_pi_expressions():
@@ -169,6 +178,11 @@ BAD_VALUES = [
      'goals.orientation_symmetry.axis: expected a non-zero vector'),
     ('goals.orientation_symmetry', {'axis': [0, 0, 1]},
      'goals.orientation_symmetry.order: expected this key'),
+    ('physics', {'solver_iterations': 0}, 'physics.solver_iterations: expected a positive '
+     'integer, got 0'),
+    ('physics', {'contact_breaking_threshold': -0.01}, 'physics.contact_breaking_threshold: '
+     'expected a positive number, got -0.01'),
+    ('physics', {'substeps': 2}, 'physics.substeps: expected no such key'),
 ]
 
 

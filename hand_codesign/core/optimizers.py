@@ -30,11 +30,11 @@ import pickle
 import random
 from typing import Mapping
 
-import cma
 from deap import base as deap_base
 from deap import cma as deap_cma
 from deap import tools as deap_tools
 from hand_codesign.core.genome import seed_genome
+from hand_codesign.core.pycma import cma
 import numpy as np
 
 SIGMA0 = 0.1

@@ -17,11 +17,19 @@ Unloading the TinyRenderer plugin (which converts every collision shape into a v
 makes building a 2x3 hand about 5 times faster; pass rendering=True to keep it for
 getCameraImage.
 
-Physics settings: the task's time step, 50 solver iterations, deterministic overlapping
+Physics settings: the task's time step, its `physics` section (50 solver iterations and a
+contact breaking threshold of 2 cm unless it says otherwise), deterministic overlapping
 pairs, and no split impulse (with split impulse, Bullet's multibody joint limits never push a
 joint back and a fast finger overshoots its limit). Bullet multiplies the friction
 coefficients of two touching bodies; the ground's is 1, so the object slides on the ground
 with its own coefficient and touches the hand with the product of both.
+
+Where a step's time goes (callgrind, Task 5 with Table I's physics): about 70 % in Bullet's
+multibody constraint solver (its 50 iterations over the contact, friction and joint-limit rows
+and their setup), 14 % in collision detection, 10 % in the hand's forward dynamics; the Python
+calls per step (torques, step) cost about 2 us of 15 to 20. Stepping several worlds' scenes in
+one client would save only those calls, so a faster step needs fewer solver iterations or
+contact rows: the task's `physics` section (bench/bench_physics.py).
 
 The rollout loop applies the policy's torques to every joint in one TORQUE_CONTROL call each
 step (the default velocity motors are off) and does nothing else per step except compare the
@@ -50,7 +58,6 @@ from hand_codesign.core.hand import build_hand, HandModel
 from hand_codesign.core.quiet_pybullet import BulletClient, c_output_silenced, pybullet
 
 GRAVITY = -9.81  # m / s^2 along world z
-SOLVER_ITERATIONS = 50
 GROUND_FRICTION = 1.0
 # The ground is a box with its top face at z = 0: faster to build than a GEOM_PLANE.
 GROUND_HALF_EXTENTS = (50.0, 50.0, 0.5)
@@ -160,9 +167,12 @@ class Simulator:
         """Reset the simulation and build ground and hand of one candidate on `task`."""
         client = self.client
         client.resetSimulation()
-        client.setPhysicsEngineParameter(fixedTimeStep=task.time_step,
-                                         numSolverIterations=SOLVER_ITERATIONS,
-                                         deterministicOverlappingPairs=1, useSplitImpulse=0)
+        physics = task.physics
+        # contactBreakingThreshold is a process-wide Bullet setting: set it for every build.
+        client.setPhysicsEngineParameter(
+            fixedTimeStep=task.time_step, numSolverIterations=physics.solver_iterations,
+            contactBreakingThreshold=physics.contact_breaking_threshold,
+            deterministicOverlappingPairs=1, useSplitImpulse=0)
         client.setGravity(0.0, 0.0, GRAVITY)
         ground_shape = client.createCollisionShape(client.GEOM_BOX,
                                                    halfExtents=GROUND_HALF_EXTENTS)

@@ -78,6 +78,8 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
       #   interval), how much it grows (s, default one check interval) once `share` (0 to 1,
       #   default 0.5) of a generation scores at most the margins' score in every objective
     weights: {position: 1.0, orientation: 0.1}          # optional: w_p, w_r of the fitness
+    physics: {solver_iterations: 50, contact_breaking_threshold: 0.02}   # optional: Bullet's
+                                     # settings; these defaults reproduce the paper's runs
     optimizer:
       algorithm: cma                 # cma (weighted sum) | mocma (Pareto front)
       iterations: 100                # generations (per hand structure)
@@ -145,16 +147,16 @@ from hand_codesign.core.task_spec import (ALGORITHMS, AXES, Bounds, DISTANCES,
                                           EarlyTerminationSpec, GoalSpec, HandSpec, HierarchySpec,
                                           HorizonSpec, MORPHOLOGY_PARAMETERS, MorphologySpec,
                                           ObjectSpec, OrientationGoal, PARAMETER_MODES,
-                                          ParameterSpec, POLICY_KINDS, PolicySpec, PositionGoal,
-                                          RandomizationSpec, resting_height, RESTING_TOLERANCE,
-                                          SHAPES, STARTS, SymmetrySpec, Task, TaskError,
-                                          TORQUE_MODES, TorquePenaltySpec, WeightsSpec)
+                                          ParameterSpec, PhysicsSpec, POLICY_KINDS, PolicySpec,
+                                          PositionGoal, RandomizationSpec, resting_height,
+                                          RESTING_TOLERANCE, SHAPES, STARTS, SymmetrySpec, Task,
+                                          TaskError, TORQUE_MODES, TorquePenaltySpec, WeightsSpec)
 
 __all__ = [
     'ALGORITHMS', 'AXES', 'axis_angle_quaternion', 'Bounds', 'DISTANCES', 'EarlyTerminationSpec',
     'GoalSpec', 'HandSpec', 'HierarchySpec', 'HorizonSpec', 'load_task', 'MORPHOLOGY_PARAMETERS',
     'MorphologySpec', 'ObjectSpec', 'OrientationGoal', 'PARAMETER_MODES', 'ParameterSpec',
-    'parse_design', 'parse_task', 'POLICY_KINDS', 'PolicySpec', 'PositionGoal',
+    'parse_design', 'parse_task', 'PhysicsSpec', 'POLICY_KINDS', 'PolicySpec', 'PositionGoal',
     'RandomizationSpec', 'resting_height', 'RESTING_TOLERANCE', 'SHAPES', 'STARTS', 'SymmetrySpec',
     'Task', 'TaskError', 'TORQUE_MODES', 'TorquePenaltySpec', 'WeightsSpec',
 ]

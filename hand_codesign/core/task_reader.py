@@ -18,7 +18,7 @@ from hand_codesign.core.task_checks import check_task
 from hand_codesign.core.task_spec import (ALGORITHMS, AXES, Bounds, DISTANCES,
                                           EarlyTerminationSpec, GoalSpec, HandSpec, HierarchySpec,
                                           HorizonSpec, MORPHOLOGY_PARAMETERS, MorphologySpec,
-                                          ObjectSpec, OrientationGoal, ParameterSpec,
+                                          ObjectSpec, OrientationGoal, ParameterSpec, PhysicsSpec,
                                           POLICY_KINDS, PolicySpec, PositionGoal,
                                           RandomizationSpec, SHAPES, STARTS, SymmetrySpec, Task,
                                           TaskError, TORQUE_MODES, TorquePenaltySpec, WeightsSpec)
@@ -167,7 +167,7 @@ class _Reader:
             'name', 'seed', 'time_step', 'duration', 'object', 'hand', 'goals',
             'randomization', 'num_world_states', 'morphology', 'policy', 'optimizer'),
             optional=('description', 'torque_penalty', 'early_termination', 'weights',
-                      'hierarchy', 'seed_design', 'two_stage'))
+                      'hierarchy', 'seed_design', 'two_stage', 'physics'))
         hierarchy = (self.hierarchy(top['hierarchy'], 'hierarchy')
                      if top.get('hierarchy') is not None else None)
         hand, structure = self.hand(top['hand'], 'hand', hierarchy)
@@ -201,6 +201,7 @@ class _Reader:
             initial_sigma=self.number(optimizer.get('initial_sigma', 0.1),
                                       'optimizer.initial_sigma', positive=True),
             weights=self.weights(top.get('weights', {}), 'weights'),
+            physics=self.physics(top.get('physics', {}), 'physics'),
             torque_penalty=self.torque_penalty(top.get('torque_penalty'), 'torque_penalty'),
             early_termination=self.early_termination(top.get('early_termination'),
                                                      'early_termination'),
@@ -495,6 +496,18 @@ class _Reader:
             step=self.number(section.get('step', interval), _join(key, 'step'),
                              positive=True),
             share=share)
+
+    def physics(self, value, key):
+        section = self.mapping(value, key, optional=('solver_iterations',
+                                                     'contact_breaking_threshold'))
+        default = PhysicsSpec()
+        return PhysicsSpec(
+            solver_iterations=self.integer(section.get('solver_iterations',
+                                                       default.solver_iterations),
+                                           _join(key, 'solver_iterations')),
+            contact_breaking_threshold=self.number(
+                section.get('contact_breaking_threshold', default.contact_breaking_threshold),
+                _join(key, 'contact_breaking_threshold'), positive=True))
 
     def weights(self, value, key):
         section = self.mapping(value, key, optional=('position', 'orientation'))
