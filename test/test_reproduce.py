@@ -147,9 +147,17 @@ TINY = """
 
 
 def start_tiny(script, out):
+    # a session of its own, as a campaign started from a shell: SIGINT reaches it alone, and
+    # nothing pytest's process did to its own signal state is inherited
     return subprocess.Popen([sys.executable, str(script), str(out)], cwd=ROOT,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                            env=dict(os.environ))
+                            env=dict(os.environ), start_new_session=True,
+                            preexec_fn=unblock_interrupts)
+
+
+def unblock_interrupts():
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT])
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def wait_for_a_generation(bag, process, timeout=180.0):

@@ -146,12 +146,13 @@ def test_recorder_killed_mid_run(clean_run, tmp_path):
     assert len(answers) == len(set(answers))
     ok = record.evaluations.select(record.evaluations['status'] == 0)
     assert sorted(set(ok['candidate_id'])) == list(range(24))
-    # each evaluator logs how many evaluations it published when it stops
-    published_evaluations = sum(
-        int(line.rsplit(' published ', 1)[1].split()[0])
-        for log in (bag / 'logs').glob('evaluator-*.log')
-        for line in log.read_text().splitlines() if ' published ' in line)
-    assert record.message_counts['/evaluations'] == published_evaluations
+    # each evaluator counts its answers in its heartbeats (EvaluatorStatus.evaluations_done,
+    # sent right after every answer); its last count is what it published
+    last_count = {}
+    statuses = record.evaluator_status
+    for evaluator, done in zip(statuses['evaluator_id'], statuses['evaluations_done']):
+        last_count[evaluator] = max(int(done), last_count.get(evaluator, 0))
+    assert record.message_counts['/evaluations'] == sum(last_count.values())
 
 
 class Hosts:
