@@ -166,8 +166,8 @@ class System:
                           {'evaluator_id': 'rig_evaluator', 'subscribers_expected': 2},
                           self.key_of('rig_evaluator')))
         if rig == 'sim':
-            nodes.append(('sim_rig', 'hand_codesign.ros.sim_rig_node', self.rig_parameters,
-                          None))
+            nodes.append(('sim_rig', 'hand_codesign.ros.sim_rig_node',
+                          dict(self.rig_parameters, subscribers_expected=2), None))
         for name, module, parameters, key in nodes:
             with open(self.bag / 'logs' / f'{name}.log', 'w') as log:
                 self.rig_nodes.append(self.node(module, parameters, key, stdout=log,

@@ -33,7 +33,9 @@ PARAMETERS = {
     'latency': (0.0, "seconds between a trial's start and its first poses", (0.0, 60.0)),
     'seed': (0, 'seed of the noise', (0, 2 ** 31 - 1)),
     'frame_id': ('world', "frame of the poses: the task's world frame", None),
+    'subscribers_expected': (0, 'status and pose subscribers to await before a trial', (0, 100)),
 }
+MATCH_WAIT = 10.0  # s: the most a trial waits for its subscribers to match
 KEPT_CANDIDATES = 4096
 
 
@@ -79,6 +81,7 @@ class SimRigNode(Node):
         except ValueError as error:
             self.report(request, contract.TRIAL_FAILED, self.now(), str(error))
             return
+        self.wait_for_subscribers()
         start = self.now()
         poses = []
         outcome = self.rig.run(task, design, spec,
@@ -94,6 +97,13 @@ class SimRigNode(Node):
         self.last_stamp = Time.from_msg(end).nanoseconds
         self.report(request, contract.TRIAL_ENDED, end,
                     'the simulation became unstable' if outcome == 'unstable' else '')
+
+    def wait_for_subscribers(self):
+        # status and poses are volatile: what is sent before a recorder matches is not recorded
+        deadline, wanted = time.monotonic() + MATCH_WAIT, self.settings['subscribers_expected']
+        while time.monotonic() < deadline and min(
+                p.get_subscription_count() for p in (self.status, self.poses)) < wanted:
+            time.sleep(0.01)
 
     def now(self):
         # simulated trials run faster than real time and are stamped in simulated time: the
