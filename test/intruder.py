@@ -35,10 +35,13 @@ def main():
     publishers = {name: node.create_publisher(topics.MESSAGE_TYPES[name], name,
                                               topics.QOS[name])
                   for name in (topics.RUN_INFO, topics.CANDIDATES, topics.EVALUATIONS)}
-    forged = []
+    forged, early = [], []
 
     def forge(candidate):
-        if runs and candidate.run_id == runs[0].run_id and candidate.candidate_id < 10**9:
+        if not runs:   # the history of candidates may arrive before the RunInfo
+            early.append(candidate)
+            return
+        if candidate.run_id == runs[0].run_id and candidate.candidate_id < 10**9:
             forged.append(candidate.candidate_id)
             publishers[topics.EVALUATIONS].publish(Evaluation(
                 run_id=candidate.run_id, generation=candidate.generation,
@@ -55,6 +58,8 @@ def main():
         print('no RunInfo seen', file=sys.stderr)
         return 1
     run = runs[0]
+    for candidate in early:
+        forge(candidate)
     publishers[topics.RUN_INFO].publish(RunInfo(run_id='foreign-run', task_yaml='not: a task'))
     publishers[topics.RUN_INFO].publish(RunInfo(
         run_id=run.run_id, task_name=run.task_name, task_yaml='not: the run task',
