@@ -333,20 +333,25 @@ def load_measures(out, experiment, seeds, suffix=''):
     return measured
 
 
+def row_head(experiment, budget, configuration, name, **extra):
+    """Return the columns a table row starts with: what was run, under `name`, then `extra`."""
+    return {'experiment': experiment.name, 'configuration': name, **extra,
+            'preset': configuration.preset, 'policy': configuration.policy,
+            'algorithm': configuration.algorithm_name,
+            'world_states': configuration.world_states, 'budget': budget.name,
+            'iterations': budget.iterations, 'population': budget.population,
+            'unseen_worlds': budget.unseen_worlds,
+            'tolerance': experiment.tolerance.describe(),
+            'unit': error_unit(experiment.tolerance)}
+
+
 def configuration_rows(experiment, budget, measured):
     """Return the table rows (dicts) of an experiment, one per configuration with measures."""
     rows = []
     for configuration in experiment.configurations:
         if not measured[configuration.key]:
             continue
-        row = {'experiment': experiment.name, 'configuration': configuration.key,
-               'preset': configuration.preset, 'policy': configuration.policy,
-               'algorithm': configuration.algorithm_name,
-               'world_states': configuration.world_states, 'budget': budget.name,
-               'iterations': budget.iterations, 'population': budget.population,
-               'unseen_worlds': budget.unseen_worlds,
-               'tolerance': experiment.tolerance.describe(),
-               'unit': error_unit(experiment.tolerance)}
+        row = row_head(experiment, budget, configuration, configuration.key)
         row.update(pooled_row(measured[configuration.key], experiment.tolerance))
         rows.append(row)
     return rows
@@ -361,15 +366,8 @@ def structure_rows(experiment, budget, measured):
             for structure, values in record.items():
                 structures.setdefault(structure, []).append(values)
         for structure in sorted(structures, key=lambda text: (text.count(','), text)):
-            row = {'experiment': experiment.name,
-                   'configuration': f'{configuration.key} {structure}', 'structure': structure,
-                   'preset': configuration.preset, 'policy': configuration.policy,
-                   'algorithm': configuration.algorithm_name,
-                   'world_states': configuration.world_states, 'budget': budget.name,
-                   'iterations': budget.iterations, 'population': budget.population,
-                   'unseen_worlds': budget.unseen_worlds,
-                   'tolerance': experiment.tolerance.describe(),
-                   'unit': error_unit(experiment.tolerance)}
+            row = row_head(experiment, budget, configuration,
+                           f'{configuration.key} {structure}', structure=structure)
             row.update(pooled_row(structures[structure], experiment.tolerance))
             rows.append(row)
     return rows
