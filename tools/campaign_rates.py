@@ -17,17 +17,13 @@ import pathlib
 
 from hand_codesign.analysis import campaign, records
 from hand_codesign.core.experiments import EXPERIMENTS, run_key
-import numpy as np
+from hand_codesign.core.preview import run_budget
+from hand_codesign.core.runs import load_run_task
 
 
 def measured_rate(runs_dir, configuration):
-    """
-    Return (rollouts, wall seconds, structures) of the configuration's finished runs.
-
-    structures: the most structures one run searched (a hierarchy's budget is per structure).
-    """
+    """Return (rollouts, wall seconds) of the configuration's finished runs."""
     rollouts = seconds = 0.0
-    structures = 1
     for path in sorted(pathlib.Path(runs_dir).glob(f'{configuration.key}-seed*')):
         if path.name.count('.resume'):
             continue
@@ -43,10 +39,14 @@ def measured_rate(runs_dir, configuration):
             info = record.run_info
             rollouts += float(summary['evaluations']) * info.world_states
             seconds += float(summary['wall_time'])
-            searched = {tuple(np.ravel(value).tolist())
-                        for value in record.generation_summaries['structure']}
-            structures = max(structures, len(searched))
-    return rollouts, seconds, structures
+    return rollouts, seconds
+
+
+def budget_rollouts(folder, configuration, budget):
+    """Return the rollouts one run of the configuration may spend at `budget` (core.preview)."""
+    task = load_run_task(pathlib.Path(folder) / 'tasks' / f'{configuration.key}.yaml', 1,
+                         budget.iterations, budget.population, configuration.world_states)
+    return run_budget(task)['rollouts']
 
 
 def main():
@@ -66,13 +66,12 @@ def main():
     total = 0.0
     print(f'{"configuration":24} {"rollouts/s here":>16} {"hours at " + budget.name:>16}')
     for configuration in experiment.configurations:
-        rollouts, seconds, structures = measured_rate(runs_dir, configuration)
+        rollouts, seconds = measured_rate(runs_dir, configuration)
         if not seconds:
             print(f'{configuration.key:24} {"no finished run":>16}')
             continue
         rate = rollouts / seconds
-        needed = (budget.iterations * budget.population * configuration.world_states * seeds
-                  * structures / rate)
+        needed = budget_rollouts(arguments.folder, configuration, budget) * seeds / rate
         total += needed
         print(f'{configuration.key:24} {rate:16.0f} {needed / 3600:16.2f}')
     hosts = total * arguments.cores / (arguments.hosts * arguments.host_cores)

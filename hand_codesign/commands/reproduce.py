@@ -10,8 +10,8 @@ and figures into DIR (layout: hand_codesign.analysis.campaign).
 Interrupted (Ctrl-C, SIGTERM, a reboot), the same command continues: finished runs are kept,
 the interrupted run is resumed from its bag (`hand-codesign run --resume`, into a new bag
 beside it), measures already computed are reused. Progress covers the whole campaign: run k
-of n and the time left, estimated from the runs finished in this session, per rollout of the
-budget.
+of n and the time left, estimated from the runs finished in this session, per physics step of
+the budget.
 """
 
 import json
@@ -24,7 +24,8 @@ import time
 
 from hand_codesign.analysis import campaign
 from hand_codesign.commands.run import termination_as_interrupt
-from hand_codesign.core import experiments
+from hand_codesign.core import experiments, preview
+from hand_codesign.core.hierarchy import GROWN_FROM
 from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
@@ -93,7 +94,7 @@ class Progress:
     """
     Run k of n of the whole campaign and the time left, from this session's runs.
 
-    A run costs a fixed part (starting processes, measuring) and a part per rollout of its
+    A run costs a fixed part (starting processes, measuring) and a part per physics step of its
     budget: both are fitted to the runs done in this session (least squares), so the estimate
     holds for campaigns of tiny runs and of long ones.
     """
@@ -101,8 +102,8 @@ class Progress:
     def __init__(self, total):
         self.total = total
         self.number = 0
-        self.done_runs = []  # (rollouts, seconds) of the runs done in this session
-        self.pending = []  # rollouts of each run not done yet
+        self.done_runs = []  # (physics steps, seconds) of the runs done in this session
+        self.pending = []  # physics steps of each run not done yet
 
     def announce(self, key, state):
         """Print the line of the next run."""
@@ -119,18 +120,18 @@ class Progress:
             return 0.0
         if not self.done_runs:
             return None
-        rollouts, seconds = (np.array(column, dtype=float) for column in zip(*self.done_runs))
-        if len(set(rollouts.tolist())) >= 2:
-            per_rollout, fixed = np.polyfit(rollouts, seconds, 1)
-            per_rollout, fixed = max(per_rollout, 0.0), max(fixed, 0.0)
+        steps, seconds = (np.array(column, dtype=float) for column in zip(*self.done_runs))
+        if len(set(steps.tolist())) >= 2:
+            per_step, fixed = np.polyfit(steps, seconds, 1)
+            per_step, fixed = max(per_step, 0.0), max(fixed, 0.0)
         else:
-            per_rollout, fixed = float(np.sum(seconds) / max(np.sum(rollouts), 1.0)), 0.0
-        return sum(fixed + per_rollout * cost for cost in self.pending)
+            per_step, fixed = float(np.sum(seconds) / max(np.sum(steps), 1.0)), 0.0
+        return sum(fixed + per_step * cost for cost in self.pending)
 
-    def done(self, rollouts, seconds):
+    def done(self, steps, seconds):
         """Count a run finished in this session."""
-        self.done_runs.append((rollouts, seconds))
-        self.pending.remove(rollouts)
+        self.done_runs.append((steps, seconds))
+        self.pending.remove(steps)
 
 
 def format_duration(seconds):
@@ -202,18 +203,32 @@ class Campaign:
         return load_run_task(self.task_file(configuration), seed, self.budget.iterations,
                              self.budget.population, configuration.world_states)
 
-    def rollouts(self, configuration):
-        """Return the rollouts one run of a configuration costs at this budget (estimate)."""
+    def cost(self, configuration):
+        """
+        Return the physics steps one run of a configuration costs at this budget (estimate).
+
+        The run's budget (every structure of a hierarchy, each optimized REPEATS times, and
+        its checks) and its designs' measure on the unseen worlds; early termination and
+        pycma's own stops make a run cheaper, never dearer.
+        """
         task = self.run_task(configuration, 1)
-        structures = 1 if task.hierarchy is None else 6
-        return (self.budget.iterations * self.budget.population * configuration.world_states
-                * structures + self.budget.unseen_worlds)
+        plan = preview.run_budget(task)
+        return (plan['physics_steps']
+                + self.budget.unseen_worlds * self.measured_designs(plan)
+                * preview.rollout_steps(task))
+
+    def measured_designs(self, plan):
+        """Return how many designs of a run are measured: its best, and each structure's."""
+        if not self.experiment.per_structure:
+            return 1
+        searched = [entry for entry in plan['structures'] if not entry.get('grown')]
+        return 1 + len(searched) + min(GROWN_FROM, len(plan['structures']) - len(searched))
 
     # ---------------------------------------------------------------- runs
 
     def pending_costs(self):
-        """Return the rollouts of each run not finished and measured yet."""
-        return [self.rollouts(configuration) for configuration, seed in self.runs
+        """Return the physics steps of each run not finished and measured yet."""
+        return [self.cost(configuration) for configuration, seed in self.runs
                 if not self.measured(configuration, seed)]
 
     def run_all(self, progress, evaluators):
@@ -231,7 +246,7 @@ class Campaign:
             if bag is None:
                 bag = self.run_one(configuration, seed, evaluators)
             self.measure(configuration, seed, bag, max(1, evaluators))
-            progress.done(self.rollouts(configuration), time.monotonic() - started)
+            progress.done(self.cost(configuration), time.monotonic() - started)
 
     def run_one(self, configuration, seed, evaluators):
         """Run (or resume) one run to its end; return its finished bag."""

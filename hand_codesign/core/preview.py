@@ -61,10 +61,7 @@ def preview(task):
     schedule = goal_schedule(task)
     path = hierarchy_path(task)
     grown = grown_structures(task, path)
-    structures = [structure_budget(task, structure, path) for structure in
-                  (path or [tuple(task.structure)])]
-    grown_budgets = [dict(structure_budget(task, structure, path), grown=True)
-                     for structure in grown]
+    structures, grown_budgets = structure_budgets(task, path, grown)
     rollout = rollout_steps(task)
     steps_per_evaluation = task.num_world_states * rollout
     return {
@@ -91,6 +88,20 @@ def preview(task):
         'early_termination': early_termination(task),
         'budget': budget(task, structures, grown_budgets),
     }
+
+
+def run_budget(task):
+    """Return the budget of a whole run of `task` (as `preview(task)['budget']`)."""
+    path = hierarchy_path(task)
+    return budget(task, *structure_budgets(task, path, grown_structures(task, path)))
+
+
+def structure_budgets(task, path, grown):
+    """Return the budgets of the structures searched and of those a finger may be grown to."""
+    structures = [structure_budget(task, structure, path) for structure in
+                  (path or [tuple(task.structure)])]
+    return structures, [dict(structure_budget(task, structure, path), grown=True)
+                        for structure in grown]
 
 
 def hierarchy_path(task):
@@ -278,4 +289,4 @@ def _floats(values):
     return [float(value) for value in values]
 
 
-__all__ = ['gene_unit', 'hierarchy_path', 'preview', 'rollout_steps']
+__all__ = ['gene_unit', 'hierarchy_path', 'preview', 'rollout_steps', 'run_budget']
