@@ -15,7 +15,8 @@ Writes into DIR (default: `<bag>_report` next to the bag):
 - `pareto.png` and `pareto_front.csv` for MO-CMA-ES runs: the Pareto front of every
   generation, coloured by generation, and the final front.
 - `report.md`: task, seed, budget, wall time, evaluations per second, the figures, and the
-  best design with its parameters in physical units.
+  best design with its parameters in physical units; for a run with restarts (ipop-cma,
+  bipop-cma) the generation, population and cause of each restart (the search replayed).
 
 It prints a summary table to the terminal.
 """
@@ -216,6 +217,20 @@ def generations_from_evaluations(rows, weights):
                        evaluations, np.full(len(generations), np.nan), 'evaluations')
 
 
+def restart_facts(record):
+    """Return [('restarts', text)] of a run with restarts (ipop-cma, bipop-cma), else []."""
+    restarts = records.restarts_of(record)
+    if not restarts:
+        return []
+    first = restarts[0]
+    parts = [f'{len(restarts) - 1}; generation 0: population {first.population}']
+    for restart in restarts[1:]:
+        regime = ', small regime' if restart.regime == 'small' else ''
+        parts.append(f'generation {restart.generation}: population {restart.population}, '
+                     f'step size {restart.sigma:.3g}{regime} (after {restart.reason})')
+    return [('restarts', '; '.join(parts))]
+
+
 def pareto_fronts(record, num_objectives, rows):
     """Return [(order, generation, front (points, objectives))] of summary rows with a front."""
     summaries = record.generation_summaries
@@ -303,6 +318,7 @@ class Report:
                 facts.append(('structure', str(list(self.task.structure))))
             if info.resumed_from:
                 facts.append(('resumed from', info.resumed_from))
+            facts += restart_facts(record)
         else:
             facts.append(('task', '(unknown: the bag holds no RunInfo)'))
         wall = self.wall_time
