@@ -16,6 +16,9 @@ to CMA-ES's, measured in the same run.
 
     python bench/compare_restarts.py [--dim 10] [--population 10] [--iterations 2000]
         [--seeds 1 2 3 4 5]
+
+Measured here with the defaults (about 40 s): median best CMA-ES 14.9 (it stops after about
+3000 evaluations), IPOP-CMA-ES 2.98 (ratio 0.20), BIPOP-CMA-ES 4.97 (ratio 0.33).
 """
 
 import argparse

@@ -89,7 +89,7 @@ def test_stagnation_ends_an_instance_after_the_window():
     optimizer = IpopCmaEs(3, [1.0], population=4, iterations=60, seed=3, stagnation=2)
     run(optimizer, rugged)
     stagnated = [r for r in optimizer.restarts if r.reason.startswith('stagnation')]
-    assert stagnated and all(r.reason == 'stagnation (2 generations without improvement)'
+    assert stagnated and all(r.reason == 'stagnation: 2 generations without improvement'
                              for r in stagnated)
     default = IpopCmaEs(10, [1.0], population=10, iterations=5, seed=3)
     assert default.stagnation_window(10) == 2 * (10 + 30)
@@ -292,7 +292,7 @@ def test_a_real_ipop_run_restarts_and_spends_its_budget(ipop_run, tmp_path, caps
     line = next(line for line in capsys.readouterr().out.splitlines()
                 if line.startswith('restarts'))
     assert 'generation 0: population 4; generation ' in line and ': population 8, ' in line
-    assert 'without improvement)' in line
+    assert '(after stagnation: 1 generation without improvement)' in line
 
 
 def test_a_real_ipop_run_is_the_same_with_two_evaluators(ipop_run, tmp_path):

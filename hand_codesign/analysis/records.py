@@ -453,14 +453,14 @@ def restarts_of(record):
 
     The bag holds no restart field: the search is replayed from the told objectives (it is
     deterministic), which gives every CMA-ES instance: the generation it started at, its
-    population, step size, regime and why the one before it ended. A hierarchy or two-stage
-    run gives those of its last optimization.
+    population, step size, regime and why the one before it ended. Only for a run of one
+    optimization: a hierarchy's or a two-stage task's optimizers count generations each from 0.
     """
     try:
         task = run_task_of(record)
     except UserError:
         return []
-    if task.algorithm not in RESTART_ALGORITHMS:
+    if task.algorithm not in RESTART_ALGORITHMS or task.hierarchy is not None or task.two_stage:
         return []
     search = Search(task)
     try:

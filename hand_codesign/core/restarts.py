@@ -166,7 +166,7 @@ class RestartCmaEs(AskTellOptimizer):
         idle = instance.generation - 1 - instance.result.generation
         window = self.stagnation_window(instance.population)
         if idle >= window:
-            return f'stagnation ({idle} generation{"s" if idle > 1 else ""} without improvement)'
+            return f'stagnation: {idle} generation{"s" if idle > 1 else ""} without improvement'
         return ''
 
     def _next_instance(self, spent):
