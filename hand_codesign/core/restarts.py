@@ -41,7 +41,7 @@ this module decides when an instance ends and how the next one starts. The choic
   bounds) with the task's step size; every later one at a point drawn uniformly in [0, 1]^n
   (the normalized genome space) from the optimizer's own generator. IPOP keeps the step size
   of the first instance and doubles the population at every restart.
-- BIPOP as Hansen 2009, with pycma's accounting: the first run counts for the small regime;
+- BIPOP as Hansen 2009, with the first run counted for the small regime as pycma counts it:
   the next run is a small-population one while the small regime has spent fewer evaluations
   than the large one, else a large one (population lambda0 2^k for the k-th large run, the
   task's step size). A small run draws U1, U2 uniform in [0, 1]: population
@@ -126,7 +126,7 @@ class RestartCmaEs(AskTellOptimizer):
     # -- the instances -------------------------------------------------------------------
 
     def _begin(self, x0, population, sigma, regime, reason, max_generations, spent):
-        """Start the next CMA-ES instance (runs with the private RNG after the first)."""
+        """Start the next CMA-ES instance at x0 (a CmaEs with a seed of its own); record it."""
         index = len(self.restarts)
         budget = max_generations or self.iterations  # a run has at most `iterations` of them
         self._instance = CmaEs(self.dim, self.weights, population, budget,
@@ -194,7 +194,7 @@ class BipopCmaEs(RestartCmaEs):
         totals = {SMALL: 0, LARGE: 0}
         ends = [restart.evaluations for restart in self.restarts[1:]] + [spent]
         for restart, end in zip(self.restarts, ends):
-            # the first run counts for the small regime (Hansen's and pycma's accounting)
+            # the first run counts for the small regime, as pycma's BIPOP counts it
             totals[LARGE if restart.regime == LARGE else SMALL] += end - restart.evaluations
         return totals
 
