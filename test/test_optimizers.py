@@ -1,4 +1,4 @@
-"""CMA-ES and MO-CMA-ES: optima of standard functions, determinism, save/restore, replay."""
+"""CMA-ES (also with restarts) and MO-CMA-ES: optima, determinism, save/restore, replay."""
 
 import dataclasses
 import os
@@ -15,12 +15,15 @@ from hand_codesign.core.genome import genome_spec, seed_genome
 from hand_codesign.core.optimizers import (
     Candidate, closest_to_zero, CmaEs, least_hypervolume_contributor, make_optimizer, MoCmaEs,
     non_dominated, OptimizerError, replay, ReplayError, TellError)
+from hand_codesign.core.restarts import BipopCmaEs, IpopCmaEs
 import numpy as np
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK5 = ROOT / 'config' / 'tasks' / 'task5.yaml'
 SHIFT = np.linspace(0.2, 0.8, 10)
+# every ask/tell optimizer, CMA-ES with restarts (core.restarts) included
+ALGORITHMS = [CmaEs, MoCmaEs, IpopCmaEs, BipopCmaEs]
 
 
 def shifted_sphere(x):
@@ -124,7 +127,7 @@ def test_closest_to_zero_normalizes_each_objective_on_the_front():
     assert closest_to_zero(np.array([[2.0, 5.0], [2.0, 5.0]])) == 0
 
 
-@pytest.mark.parametrize('algorithm', [CmaEs, MoCmaEs])
+@pytest.mark.parametrize('algorithm', ALGORITHMS)
 def test_same_seed_same_candidates_and_global_rng_untouched(algorithm):
     np.random.seed(123)
     expected_draw = np.random.rand()
@@ -138,7 +141,7 @@ def test_same_seed_same_candidates_and_global_rng_untouched(algorithm):
     assert not np.array_equal(first[0].x, other[0].x)
 
 
-@pytest.mark.parametrize('algorithm', [CmaEs, MoCmaEs])
+@pytest.mark.parametrize('algorithm', ALGORITHMS)
 def test_state_restored_mid_run_continues_bit_identically(algorithm):
     reference = algorithm(6, [1.0, 0.1], 8, 12, seed=3)
     run(reference, zdt1, generations=5)
@@ -168,7 +171,7 @@ pickle.dump([(c.candidate_id, c.generation, c.x) for c in asked], open({out!r}, 
 """
 
 
-@pytest.mark.parametrize('algorithm', [CmaEs, MoCmaEs])
+@pytest.mark.parametrize('algorithm', ALGORITHMS)
 def test_state_continues_bit_identically_in_another_process(algorithm, tmp_path):
     reference = algorithm(6, [1.0, 0.1], 8, 10, seed=4)
     run(reference, zdt1, generations=4)
@@ -184,7 +187,7 @@ def test_state_continues_bit_identically_in_another_process(algorithm, tmp_path)
     assert same_candidates([Candidate(*row) for row in continued], expected)
 
 
-@pytest.mark.parametrize('algorithm', [CmaEs, MoCmaEs])
+@pytest.mark.parametrize('algorithm', ALGORITHMS)
 def test_replaying_recorded_evaluations_rebuilds_the_run(algorithm):
     original = algorithm(6, [1.0, 0.1], 8, 12, seed=5)
     asked = run(original, zdt1, generations=4)
@@ -204,7 +207,7 @@ def test_replaying_recorded_evaluations_rebuilds_the_run(algorithm):
         replay(wrong_seed, recorded, genomes)
 
 
-@pytest.mark.parametrize('algorithm', [CmaEs, MoCmaEs])
+@pytest.mark.parametrize('algorithm', ALGORITHMS)
 def test_tell_refuses_missing_unknown_and_duplicated_ids(algorithm):
     optimizer = algorithm(4, [1.0, 0.1], 6, 5, seed=0, first_id=10)
     with pytest.raises(TellError, match='call ask'):
@@ -235,6 +238,7 @@ def test_optimizers_write_no_files(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     run(CmaEs(4, [1.0], 6, 30, seed=0), shifted_sphere_4d)
     run(MoCmaEs(4, [1.0, 1.0], 6, 5, seed=0), zdt1)
+    run(IpopCmaEs(4, [1.0], 6, 30, seed=0, stagnation=2), shifted_sphere_4d)
     assert list(tmp_path.iterdir()) == []
 
 

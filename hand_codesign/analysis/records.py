@@ -13,7 +13,8 @@ work on the RunRecord it returns:
   from what the summaries say was told: a forgery the optimizer ignored, or a liar's);
 - `recorded_design(record, candidate_id)`: one recorded candidate with its recorded result;
 - `best_candidate_id(record)` and `ranked_candidate_id(record, generation, rank)`: which design
-  a verb works on by default and on request.
+  a verb works on by default and on request;
+- `restarts_of(record)`: the CMA-ES instances of a run with restarts (ipop-cma, bipop-cma).
 """
 
 import dataclasses
@@ -29,6 +30,7 @@ from hand_codesign.core.optimizers import OptimizerError
 from hand_codesign.core.optimizers import replay
 from hand_codesign.core.search import Search
 from hand_codesign.core.task import TaskError
+from hand_codesign.core.task_spec import RESTART_ALGORITHMS
 from hand_codesign.errors import UserError
 import numpy as np
 
@@ -443,6 +445,29 @@ def structure_bests(record):
                         f'search of its task and seed: {error}') from None
     return [(outcome.structure, int(outcome.result.candidate_id))
             for outcome in search.outcomes]
+
+
+def restarts_of(record):
+    """
+    Return the core.restarts Restart records of a run of ipop-cma or bipop-cma, else [].
+
+    The bag holds no restart field: the search is replayed from the told objectives (it is
+    deterministic), which gives every CMA-ES instance: the generation it started at, its
+    population, step size, regime and why the one before it ended. Only for a run of one
+    optimization: a hierarchy's or a two-stage task's optimizers count generations each from 0.
+    """
+    try:
+        task = run_task_of(record)
+    except UserError:
+        return []
+    if task.algorithm not in RESTART_ALGORITHMS or task.hierarchy is not None or task.two_stage:
+        return []
+    search = Search(task)
+    try:
+        replay(search, told_objectives(record))
+    except OptimizerError:
+        return []
+    return list(search.optimizer.restarts)
 
 
 def ranked_candidate_id(record, generation=None, rank=0):

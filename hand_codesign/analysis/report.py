@@ -15,7 +15,8 @@ Writes into DIR (default: `<bag>_report` next to the bag):
 - `pareto.png` and `pareto_front.csv` for MO-CMA-ES runs: the Pareto front of every
   generation, coloured by generation, and the final front.
 - `report.md`: task, seed, budget, wall time, evaluations per second, the figures, and the
-  best design with its parameters in physical units.
+  best design with its parameters in physical units; for a run with restarts (ipop-cma,
+  bipop-cma) the generation, population and cause of each restart (the search replayed).
 
 It prints a summary table to the terminal.
 """
@@ -216,6 +217,19 @@ def generations_from_evaluations(rows, weights):
                        evaluations, np.full(len(generations), np.nan), 'evaluations')
 
 
+def restart_facts(restarts):
+    """Return [('restarts', text)] of a run's core.restarts Restart records, or [] for none."""
+    if not restarts:
+        return []
+    first = restarts[0]
+    parts = [f'{len(restarts) - 1}; generation 0: population {first.population}']
+    for restart in restarts[1:]:
+        regime = ', small regime' if restart.regime == 'small' else ''
+        parts.append(f'generation {restart.generation}: population {restart.population}, '
+                     f'step size {restart.sigma:.3g}{regime} (after {restart.reason})')
+    return [('restarts', '; '.join(parts))]
+
+
 def pareto_fronts(record, num_objectives, rows):
     """Return [(order, generation, front (points, objectives))] of summary rows with a front."""
     summaries = record.generation_summaries
@@ -255,6 +269,7 @@ class Report:
         self.fronts = (pareto_fronts(record, len(self.names), self.generations.rows)
                        if self.names else [])
         self.best = self._best_design()
+        self.restarts = records.restarts_of(record)  # of ipop-cma, bipop-cma; else []
         self.rig = rig_comparison(record)   # prediction against measurement, if any
 
     # ---------------------------------------------------------------- facts
@@ -303,6 +318,7 @@ class Report:
                 facts.append(('structure', str(list(self.task.structure))))
             if info.resumed_from:
                 facts.append(('resumed from', info.resumed_from))
+            facts += restart_facts(self.restarts)
         else:
             facts.append(('task', '(unknown: the bag holds no RunInfo)'))
         wall = self.wall_time
@@ -364,7 +380,7 @@ class Report:
         figures = []
         if len(self.generations) and self.names:
             figures.append(plot_convergence(out / 'convergence.png', self.generations,
-                                            self.names, self.record.run_id))
+                                            self.names, self.record.run_id, self.restarts))
         if self.fronts:
             figures.append(plot_pareto(out / 'pareto.png', self.fronts, self.names))
             files.append(out / 'pareto_front.csv')
@@ -524,8 +540,12 @@ def _scale(axes, values):
         axes.set_yscale('log')
 
 
-def plot_convergence(path, generations, names, title):
-    """Plot best and median of each objective per generation, and the best fitness so far."""
+def plot_convergence(path, generations, names, title, restarts=()):
+    """
+    Plot best and median of each objective per generation, and the best fitness so far.
+
+    restarts: core.restarts Restart records; each restart is a dashed line at its generation.
+    """
     pyplot = _pyplot()
     panels = len(names) + 1
     columns = min(panels, 3)
@@ -550,6 +570,9 @@ def plot_convergence(path, generations, names, title):
             ax.ticklabel_format(axis='y', useOffset=False)
         for change in changes:
             ax.axvline(change - 0.5, color='grey', linestyle=':', linewidth=0.8)
+        for restart in restarts[1:]:
+            ax.axvline(restart.generation - 0.5, color='tab:red', linestyle='--',
+                       linewidth=0.8)
         if changes:
             for start in [0] + changes:
                 ax.text(start - 0.4, 0.98, 'x'.join(map(str, generations.structures[start])),

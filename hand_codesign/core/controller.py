@@ -242,6 +242,7 @@ class RunController:
         summary['best_design'] = self.best_design(structure, optimizer.result.x)
         summary.update(self.trust_counts(), audited_ids=sorted(self.audits.audited))
         summary['stage'] = stage  # for the progress line; the candidates carry it
+        summary.update(restart_facts(optimizer, generation))
         self.outbox.send_summary(summary)
         if checking:
             seeds = ', '.join(str(seed) for seed in self.search.outcomes[-1].seeds)
@@ -252,8 +253,9 @@ class RunController:
                             for name, value in zip(self.task.objective_names, objectives[0])))
             return
         self.last_summary = summary
-        done = optimizer.generation
-        left = elapsed / done * (self.task.iterations - done)
+        # a budget of evaluations: with restarts (core.restarts) generations grow
+        done = optimizer.evaluations
+        left = elapsed / done * (self.task.iterations * self.task.population - done)
         rate = self.told / max(elapsed, 1e-9)  # a fake clock may not have moved
         line = progress_line(summary, self.task.iterations, rate, left)
         if self.audits.audit_evaluations:
@@ -303,6 +305,23 @@ class RunController:
             'design': genome_spec(self.task.replace(structure=structure)).design_values(
                 result.x),
         }
+
+
+def restart_facts(optimizer, generation):
+    """
+    Return the summary entries of a restart run's generation (core.restarts), else {}.
+
+    restart: the index of the CMA-ES instance that asked the generation; population: that
+    instance's population; spent and budget: the optimizer's evaluations told and budget. The
+    GenerationSummary message has no field for them (its told_ids show each generation's size,
+    and a replay of the told objectives gives every restart); the progress line shows them.
+    """
+    restart_of = getattr(optimizer, 'restart_of', None)
+    if restart_of is None:
+        return {}
+    instance = restart_of(generation)
+    return {'restart': instance.index, 'population': instance.population,
+            'spent': optimizer.evaluations, 'budget': optimizer.budget}
 
 
 def write_result(path, result, published):

@@ -25,7 +25,8 @@ from typing import Dict, Tuple
 
 from hand_codesign.core.measures import Tolerance
 
-ALGORITHM_NAMES = {'cma': 'CMA-ES', 'mocma': 'MO-CMA-ES'}
+ALGORITHM_NAMES = {'cma': 'CMA-ES', 'mocma': 'MO-CMA-ES', 'ipop-cma': 'IPOP-CMA-ES',
+                   'bipop-cma': 'BIPOP-CMA-ES'}
 BUDGET_NAMES = ('smoke', 'reduced', 'paper')
 
 
@@ -35,7 +36,7 @@ class Configuration:
 
     key: str  # file-safe name, unique in the experiment
     preset: str  # file name in config/reproduce/
-    algorithm: str  # cma | mocma
+    algorithm: str  # cma | mocma | ipop-cma | bipop-cma
     world_states: int  # training worlds per candidate
     policy: str  # torque | pd (for the table)
 
@@ -141,7 +142,7 @@ def pinned_dir():
     return pathlib.Path(sys.prefix) / 'share' / 'hand_codesign' / 'config' / 'reproduce'
 
 
-_ALGORITHM_LINE = re.compile(r'^(\s+algorithm:\s*)(\w+)', re.MULTILINE)
+_ALGORITHM_LINE = re.compile(r'^(\s+algorithm:\s*)([\w-]+)', re.MULTILINE)
 
 
 def configuration_task_text(configuration, preset_text):

@@ -1,6 +1,9 @@
 """
 Ask/tell optimizers of the co-design: CMA-ES (pycma) and MO-CMA-ES (DEAP).
 
+CMA-ES with restarts (IPOP, BIPOP) builds on CmaEs in `core.restarts`; `make_optimizer`
+returns any of them.
+
 Both search the normalized genome space (sections III.C and III.D of the paper): the search
 starts at the centre of the bounds (0.5 per coordinate) or at a seeded design, with step size
 0.1; the space is unbounded because `hand_codesign.core` folds every value back into [0, 1].
@@ -543,12 +546,16 @@ def make_optimizer(task, dim, first_id=0, seed_x=None, seed=None):
     """
     Return the optimizer of task.algorithm for a genome of `dim` normalized values.
 
-    It takes population, iteration budget, objective weights, initial step size and seed from
-    the task. It starts at `seed_x` if given, else at the task's seed design (seeded search,
-    Tasks 1 and 2: the normalized genome of `task.seed_design`), else at the centre of the
-    bounds. `seed` replaces task.seed as the optimizer's seed (the worlds keep task.seed).
+    cma and mocma are this module's; ipop-cma and bipop-cma (CMA-ES with restarts, which also
+    take task.restart_stagnation) are core.restarts'. It takes population, iteration budget,
+    objective weights, initial step size and seed from the task. It starts at `seed_x` if
+    given, else at the task's seed design (seeded search, Tasks 1 and 2: the normalized genome
+    of `task.seed_design`), else at the centre of the bounds. `seed` replaces task.seed as the
+    optimizer's seed (the worlds keep task.seed).
     """
-    classes = {'cma': CmaEs, 'mocma': MoCmaEs}
+    # imported here: core.restarts builds on this module's CmaEs
+    from hand_codesign.core.restarts import ALGORITHMS as RESTART_ALGORITHMS
+    classes = {'cma': CmaEs, 'mocma': MoCmaEs, **RESTART_ALGORITHMS}
     if task.algorithm not in classes:
         raise OptimizerError(
             f'task {task.name!r}: algorithm must be one of {sorted(classes)}, got '
@@ -556,10 +563,12 @@ def make_optimizer(task, dim, first_id=0, seed_x=None, seed=None):
     design = task.seed_design
     if seed_x is None and design is not None and design.hand.structure == tuple(task.structure):
         seed_x = seed_genome(task)
+    extra = ({'stagnation': task.restart_stagnation} if task.algorithm in RESTART_ALGORITHMS
+             else {})
     return classes[task.algorithm](
         dim, task.objective_weights, task.population, task.iterations,
         task.seed if seed is None else seed,
-        first_id=first_id, x0=seed_x, sigma0=task.initial_sigma)
+        first_id=first_id, x0=seed_x, sigma0=task.initial_sigma, **extra)
 
 
 def replay(optimizer, recorded, recorded_x=None):

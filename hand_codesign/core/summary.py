@@ -46,6 +46,12 @@ def progress_line(summary, iterations, rate, seconds_left):
     if summary.get('horizon'):
         structure += f', horizon {summary["horizon"]:g} s'
     stage = f' of stage {summary["stage"]}' if summary.get('stage') else ''
-    return (f'generation {summary["generation"] + 1}/{iterations}{stage} [{structure}] | '
+    position = f'generation {summary["generation"] + 1}/{iterations}{stage}'
+    if summary.get('restart') is not None:
+        # with restarts (core.restarts) the budget is in evaluations, not generations
+        position = (f'generation {summary["generation"] + 1}{stage} (restart '
+                    f'{summary["restart"]}, population {summary["population"]}; '
+                    f'{summary["spent"]}/{summary["budget"]} evaluations)')
+    return (f'{position} [{structure}] | '
             f'{summary["evaluations"]} evaluations, {rate:.1f}/s | best fitness '
             f'{summary["best_fitness"]:.4g} ({best}) | about {seconds_left:.0f} s left')

@@ -81,10 +81,14 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
     physics: {solver_iterations: 50, contact_breaking_threshold: 0.02}   # optional: Bullet's
                                      # settings; these defaults reproduce the paper's runs
     optimizer:
-      algorithm: cma                 # cma (weighted sum) | mocma (Pareto front)
+      algorithm: cma                 # cma (weighted sum) | mocma (Pareto front) | ipop-cma |
+                                     # bipop-cma (CMA-ES with restarts, core.restarts; the
+                                     # budget stays iterations x population evaluations)
       iterations: 100                # generations (per hand structure)
       population: 80
       initial_sigma: 0.1             # optional, in the normalized genome space
+      restart_stagnation: 20         # optional, ipop-cma / bipop-cma only: generations
+                                     # without improvement that end a CMA-ES instance
     hierarchy:                       # optional: search hand structures bottom-up (Fig. 1)
       start: [1]
       stop_structure: [2, 3]         # optional: last structure; or max_fingers/max_joints

@@ -6,7 +6,8 @@ Each raises TaskError naming the key to fix.
 
 import math
 
-from hand_codesign.core.task_spec import (ALGORITHMS, MORPHOLOGY_PARAMETERS, resting_height,
+from hand_codesign.core.task_spec import (ALGORITHMS, MORPHOLOGY_PARAMETERS,
+                                          RESTART_ALGORITHMS, resting_height,
                                           RESTING_TOLERANCE, TaskError)
 import numpy as np
 
@@ -30,6 +31,9 @@ def check_task(task):
              f'{task.structure!r}')
     if task.algorithm not in ALGORITHMS:
         fail('optimizer.algorithm', f'one of {", ".join(ALGORITHMS)}, got {task.algorithm!r}')
+    if task.restart_stagnation is not None and task.algorithm not in RESTART_ALGORITHMS:
+        fail('optimizer.restart_stagnation', f'no restart_stagnation for {task.algorithm} (it '
+             f'is for {" and ".join(RESTART_ALGORITHMS)}, which restart CMA-ES)')
     steps = task.duration / task.time_step
     if abs(steps - round(steps)) > 1e-6 or round(steps) < 1:
         fail('duration', f'a whole number of time steps ({task.time_step} s), got '

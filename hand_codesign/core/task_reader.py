@@ -173,7 +173,7 @@ class _Reader:
         hand, structure = self.hand(top['hand'], 'hand', hierarchy)
         optimizer = self.mapping(top['optimizer'], 'optimizer',
                                  required=('algorithm', 'iterations', 'population'),
-                                 optional=('initial_sigma',))
+                                 optional=('initial_sigma', 'restart_stagnation'))
         seed_design = None
         if top.get('seed_design') is not None:
             seed_design = self.seed_design(top['seed_design'], 'seed_design')
@@ -200,6 +200,9 @@ class _Reader:
             population=self.integer(optimizer['population'], 'optimizer.population'),
             initial_sigma=self.number(optimizer.get('initial_sigma', 0.1),
                                       'optimizer.initial_sigma', positive=True),
+            restart_stagnation=(self.integer(optimizer['restart_stagnation'],
+                                             'optimizer.restart_stagnation')
+                                if optimizer.get('restart_stagnation') is not None else None),
             weights=self.weights(top.get('weights', {}), 'weights'),
             physics=self.physics(top.get('physics', {}), 'physics'),
             torque_penalty=self.torque_penalty(top.get('torque_penalty'), 'torque_penalty'),

@@ -16,7 +16,8 @@ import numpy as np
 SHAPES = ('sphere', 'box', 'capsule')
 STARTS = ('plane', 'midair')
 DISTANCES = ('euclidean', 'manhattan')
-ALGORITHMS = ('cma', 'mocma')
+ALGORITHMS = ('cma', 'mocma', 'ipop-cma', 'bipop-cma')
+RESTART_ALGORITHMS = ('ipop-cma', 'bipop-cma')  # CMA-ES with restarts (core.restarts)
 POLICY_KINDS = ('torque', 'pd')
 TORQUE_MODES = ('constant', 'interpolated')
 PARAMETER_MODES = ('fixed', 'bounds', 'delta', 'seed', 'none')
@@ -270,6 +271,9 @@ class Task:
     iterations: int
     population: int
     initial_sigma: float = 0.1
+    # generations without improvement after which ipop-cma / bipop-cma restart (core.restarts);
+    # None: their default window
+    restart_stagnation: Optional[int] = None
     weights: WeightsSpec = WeightsSpec()
     physics: PhysicsSpec = PhysicsSpec()
     torque_penalty: Optional[TorquePenaltySpec] = None
