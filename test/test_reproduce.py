@@ -60,7 +60,33 @@ def test_configurations_pin_their_algorithm_and_preset(name):
         text = experiments.configuration_task_text(configuration, preset.read_text())
         task = parse_task(text, source=str(preset))
         assert task.algorithm == configuration.algorithm
-        assert configuration.algorithm_name in ('CMA-ES', 'MO-CMA-ES')
+        expected = ('CMA-ES', 'MO-CMA-ES') if not experiment.beyond_paper else (
+            experiments.ALGORITHM_NAMES.values())
+        assert configuration.algorithm_name in expected
+        if not configuration.options:
+            assert text.count('#') == preset.read_text().count('#')  # comments kept
+
+
+def test_all_runs_the_papers_experiments_and_levers_set_their_options():
+    names = [experiment.name for experiment in experiments.paper_experiments()]
+    assert names == ['task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded']
+    levers = experiments.EXPERIMENTS['levers-task5']
+    assert levers.beyond_paper
+    by_key = {configuration.key: configuration for configuration in levers.configurations}
+    preset = experiments.pinned_dir() / 'task5.yaml'
+    worst = parse_task(experiments.configuration_task_text(by_key['cma-worst25'],
+                                                           preset.read_text()))
+    resampled = parse_task(experiments.configuration_task_text(by_key['cma-resample'],
+                                                               preset.read_text()))
+    paper = parse_task(preset.read_text())
+    assert (worst.worlds.aggregate, worst.worlds.fraction) == ('worst', 0.25)
+    assert resampled.worlds.resample == 'generation'
+    for task in (worst, resampled):  # nothing else changed
+        assert task.replace(worlds=paper.worlds) == paper
+    reduced = levers.budget('reduced')
+    assert (reduced.iterations, reduced.population, reduced.seeds) == (40, 40, 5)
+    assert experiments.training_worlds(by_key['cma'], reduced) == 16
+    assert experiments.training_worlds(by_key['cma'], levers.budget('paper')) == 64
 
 
 def test_unseen_worlds_are_disjoint_from_training_and_nested():

@@ -16,7 +16,7 @@ import argparse
 import pathlib
 
 from hand_codesign.analysis import campaign, records
-from hand_codesign.core.experiments import EXPERIMENTS, run_key
+from hand_codesign.core.experiments import EXPERIMENTS, run_key, training_worlds
 from hand_codesign.core.preview import run_budget
 from hand_codesign.core.runs import load_run_task
 
@@ -45,7 +45,8 @@ def measured_rate(runs_dir, configuration):
 def budget_rollouts(folder, configuration, budget):
     """Return the rollouts one run of the configuration may spend at `budget` (core.preview)."""
     task = load_run_task(pathlib.Path(folder) / 'tasks' / f'{configuration.key}.yaml', 1,
-                         budget.iterations, budget.population, configuration.world_states)
+                         budget.iterations, budget.population,
+                         training_worlds(configuration, budget))
     return run_budget(task)['rollouts']
 
 

@@ -26,6 +26,7 @@ import pathlib
 
 from hand_codesign.analysis import records
 from hand_codesign.analysis.report import Generations, generations_from_summaries, write_csv
+from hand_codesign.core.experiments import run_key, training_worlds
 from hand_codesign.core.measures import (DesignMeasures, measure_worlds, summarize,
                                          unseen_world_states, WorldMeasures)
 from hand_codesign.errors import UserError
@@ -321,7 +322,6 @@ def read_campaign(out):
 
 def load_measures(out, experiment, seeds, suffix=''):
     """Return {configuration key: [measures record per seed]} of a campaign folder."""
-    from hand_codesign.core.experiments import run_key
     measured = {}
     for configuration in experiment.configurations:
         records_of_seeds = []
@@ -338,7 +338,7 @@ def row_head(experiment, budget, configuration, name, **extra):
     return {'experiment': experiment.name, 'configuration': name, **extra,
             'preset': configuration.preset, 'policy': configuration.policy,
             'algorithm': configuration.algorithm_name,
-            'world_states': configuration.world_states, 'budget': budget.name,
+            'world_states': training_worlds(configuration, budget), 'budget': budget.name,
             'iterations': budget.iterations, 'population': budget.population,
             'unseen_worlds': budget.unseen_worlds,
             'tolerance': experiment.tolerance.describe(),
@@ -412,9 +412,8 @@ def write_results(out, experiment, budget, seeds):
         figure = out / f'{name}-convergence.png'
         panels = []
         for configuration in experiment.configurations:
-            from hand_codesign.core.experiments import run_key
-            curves = [(seed, run_generations(attempts(out / 'runs', run_key(configuration,
-                                                                            seed))))
+            curves = [(seed, run_generations(attempts(out / 'runs',
+                                                      run_key(configuration, seed))))
                       for seed in range(1, seeds + 1)]
             panels.append((f'{configuration.key} ({configuration.algorithm_name})', curves))
         plot_convergence(figure, panels, f'{name}, {budget.name} budget')

@@ -40,8 +40,8 @@ def reproduce_command(arguments):
     """Run (or continue) an experiment's campaign and write its tables; return exit code."""
     if arguments.list:
         for name in experiments.experiment_names():
-            summary = ('every experiment above, one after the other' if name == experiments.ALL
-                       else experiments.EXPERIMENTS[name].summary)
+            summary = ('every experiment of the paper above, one after the other'
+                       if name == experiments.ALL else experiments.EXPERIMENTS[name].summary)
             print(f'{name}  {summary}')
         return 0
     chosen = chosen_experiments(arguments.experiment)
@@ -75,7 +75,7 @@ def chosen_experiments(name):
     if name is None:
         raise UserError('name an experiment (see `hand-codesign reproduce --list`)')
     if name == experiments.ALL:
-        return list(experiments.EXPERIMENTS.values())
+        return experiments.paper_experiments()
     if name not in experiments.EXPERIMENTS:
         raise UserError(f'unknown experiment "{name}"; expected one of '
                         f'{", ".join(experiments.experiment_names())}')
@@ -201,7 +201,8 @@ class Campaign:
     def run_task(self, configuration, seed):
         """Return the Task of one run (the campaign's task text and the budget)."""
         return load_run_task(self.task_file(configuration), seed, self.budget.iterations,
-                             self.budget.population, configuration.world_states)
+                             self.budget.population,
+                             experiments.training_worlds(configuration, self.budget))
 
     def cost(self, configuration):
         """

@@ -15,6 +15,11 @@ to the presets in `config/tasks/` do not change what `reproduce` reproduces.
 
 Budgets: `paper` is Table I's; `reduced` fits this 2-core machine in about an hour per
 experiment (Tasks 5 and 6) to a few hours (Tasks 1 and 4); `smoke` takes minutes.
+
+Beyond the paper, `levers-task5` and `levers-task6` compare the paper's algorithms with the
+levers of a more reliable search (restarts, the worst worlds, resampled worlds) on the same
+evaluations; a budget may fix the training worlds of every configuration (`reduced`: issue
+12's 40 x 40 on 16 worlds). They run from the same pinned presets and are not part of `all`.
 """
 
 import dataclasses
@@ -24,6 +29,7 @@ import sys
 from typing import Dict, Tuple
 
 from hand_codesign.core.measures import Tolerance
+import yaml
 
 ALGORITHM_NAMES = {'cma': 'CMA-ES', 'mocma': 'MO-CMA-ES', 'ipop-cma': 'IPOP-CMA-ES',
                    'bipop-cma': 'BIPOP-CMA-ES'}
@@ -37,8 +43,9 @@ class Configuration:
     key: str  # file-safe name, unique in the experiment
     preset: str  # file name in config/reproduce/
     algorithm: str  # cma | mocma | ipop-cma | bipop-cma
-    world_states: int  # training worlds per candidate
+    world_states: int  # training worlds per candidate (unless the budget sets them)
     policy: str  # torque | pd (for the table)
+    options: Tuple[Tuple[str, object], ...] = ()  # (dotted task key, value) set in the preset
 
     @property
     def algorithm_name(self):
@@ -55,6 +62,7 @@ class Budget:
     population: int
     unseen_worlds: int
     seeds: int
+    world_states: int = 0  # training worlds of every configuration; 0: each configuration's
 
     def describe(self):
         """Return e.g. 'smoke: 4 generations x 8 candidates, 100 unseen worlds'."""
@@ -73,6 +81,7 @@ class Experiment:
     budgets: Dict[str, Budget]
     per_structure: bool = False  # hierarchy: measure each structure's best (Fig. 3)
     convergence: bool = False  # draw the configurations' convergence side by side
+    beyond_paper: bool = False  # ours, not the paper's: listed, but not part of `all`
 
     def budget(self, name):
         """Return the Budget called name, or raise KeyError."""
@@ -92,6 +101,24 @@ def _joint_limit_configurations(preset, name, policies):
         for algorithm in ('cma', 'mocma') for worlds in (8, 64, 128))
 
 
+def _lever_configurations(preset):
+    """The paper's algorithms and each lever of the search beyond it, on one pinned preset."""
+    levers = (('cma', 'cma', ()), ('mocma', 'mocma', ()), ('ipop-cma', 'ipop-cma', ()),
+              ('bipop-cma', 'bipop-cma', ()),
+              ('cma-worst25', 'cma', (('worlds.aggregate', 'worst'), ('worlds.fraction', 0.25))),
+              ('cma-resample', 'cma', (('worlds.resample', 'generation'),)))
+    return tuple(Configuration(key, preset, algorithm, LEVER_WORLDS, 'torque', options)
+                 for key, algorithm, options in levers)
+
+
+def _lever_budgets(paper_worlds):
+    """Issue 12's budgets: 40 x 40 on 16 worlds, and Table I's, each over 5 seeds."""
+    return {'smoke': Budget('smoke', 4, 8, 100, 1, world_states=4),
+            'reduced': Budget('reduced', 40, 40, 1000, 5, world_states=LEVER_WORLDS),
+            'paper': Budget('paper', 100, 80, 1000, 5, world_states=paper_worlds)}
+
+
+LEVER_WORLDS = 16
 PLANE_5MM = Tolerance('plane', 0.005)
 ORIENTATION_01 = Tolerance('orientation', 0.1)
 
@@ -125,6 +152,18 @@ EXPERIMENTS = {
          Configuration('task3-scratch-mocma-16w', 'task3.yaml', 'mocma', 16, 'torque')),
         ORIENTATION_01, _budgets((3, 8, 100, 1), (40, 24, 1000, 2), (1000, 250, 1000, 5)),
         convergence=True),
+    'levers-task5': Experiment(
+        'levers-task5',
+        'beyond the paper: Task 5 (torque) with CMA-ES and MO-CMA-ES against restarts '
+        '(IPOP-, BIPOP-CMA-ES), the worst quarter of the worlds (CVaR) and worlds resampled '
+        'each generation, on the same evaluations',
+        _lever_configurations('task5.yaml'), PLANE_5MM, _lever_budgets(64),
+        convergence=True, beyond_paper=True),
+    'levers-task6': Experiment(
+        'levers-task6',
+        'beyond the paper: Task 6 (torque), the same levers as levers-task5',
+        _lever_configurations('task6.yaml'), ORIENTATION_01, _lever_budgets(128),
+        convergence=True, beyond_paper=True),
 }
 ALL = 'all'
 
@@ -132,6 +171,11 @@ ALL = 'all'
 def experiment_names():
     """Return the experiment names `reproduce` accepts, `all` last."""
     return list(EXPERIMENTS) + [ALL]
+
+
+def paper_experiments():
+    """Return the experiments of the paper (those `all` runs), in order."""
+    return [experiment for experiment in EXPERIMENTS.values() if not experiment.beyond_paper]
 
 
 def pinned_dir():
@@ -146,12 +190,33 @@ _ALGORITHM_LINE = re.compile(r'^(\s+algorithm:\s*)([\w-]+)', re.MULTILINE)
 
 
 def configuration_task_text(configuration, preset_text):
-    """Return the pinned preset text with the configuration's algorithm set."""
+    """
+    Return the pinned preset text with the configuration's algorithm and options set.
+
+    Without options the preset's text is kept, comments and all; options (a configuration
+    beyond the paper) are set in the parsed task, which is written back without comments.
+    """
     text, count = _ALGORITHM_LINE.subn(
         lambda match: match.group(1) + configuration.algorithm, preset_text, count=1)
     if count != 1:
         raise ValueError(f'{configuration.preset}: no "optimizer.algorithm" line to pin')
-    return text
+    if not configuration.options:
+        return text
+    task = yaml.safe_load(text)
+    for dotted, value in configuration.options:
+        *sections, key = dotted.split('.')
+        mapping = task
+        for section in sections:
+            mapping = mapping.setdefault(section, {})
+        mapping[key] = value
+    changes = ', '.join(f'{dotted}: {value}' for dotted, value in configuration.options)
+    return (f'# config/reproduce/{configuration.preset} (see its comments) with {changes}\n'
+            + yaml.safe_dump(task, sort_keys=False))
+
+
+def training_worlds(configuration, budget):
+    """Return the worlds per candidate of a configuration's runs at a budget."""
+    return budget.world_states or configuration.world_states
 
 
 def run_key(configuration, seed):
@@ -160,4 +225,5 @@ def run_key(configuration, seed):
 
 
 __all__ = ['ALGORITHM_NAMES', 'Budget', 'Configuration', 'Experiment', 'EXPERIMENTS',
-           'experiment_names', 'pinned_dir', 'run_key']
+           'experiment_names', 'paper_experiments', 'pinned_dir', 'run_key',
+           'training_worlds']
