@@ -439,6 +439,10 @@ class Report:
             return lines + ['No design was evaluated successfully.']
         stage = (f' of stage {design.stage} ({STAGE_WORLDS[design.stage]})'
                  if design.stage else '')
+        if design.world_draw:
+            stage += f' on resampled worlds (draw {design.world_draw})'
+        elif self.task is not None and self.task.worlds.resample != 'none':
+            stage += ', its final check on the fixed worlds (the run resampled its worlds)'
         lines.append(f'Candidate {design.candidate_id} of generation {design.generation}{stage}, '
                      f'structure {list(design.structure)}, evaluated by '
                      f'{design.evaluator_id or "(no evaluation in the bag)"}'
