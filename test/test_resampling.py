@@ -5,6 +5,8 @@ import pathlib
 import subprocess
 import sys
 
+from analysis_run import copy_bag
+from analysis_run import run_cli
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.records import best_candidate_id
 from hand_codesign.analysis.records import design_task
@@ -19,6 +21,7 @@ from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.search import Search
 from hand_codesign.core.worlds import world_states
 from hand_codesign.errors import UserError
+from hand_codesign.ros import topics
 import numpy as np
 import pytest
 import yaml
@@ -168,7 +171,8 @@ def test_a_real_resampled_run_is_the_same_with_one_and_two_evaluators(runs):
     assert len(set(read_run(two).evaluations['evaluator_id'])) == 2
 
 
-def test_the_reported_design_is_the_final_checks_best_on_the_fixed_worlds(runs, capsys):
+def test_the_reported_design_is_the_final_checks_best_on_the_fixed_worlds(runs, capsys,
+                                                                          tmp_path):
     bag = runs[0] / 'evaluators2'
     result = json.loads((bag / 'result.json').read_text())
     assert result['stop_reason'] == 'maxiter=3, final_check=2'
@@ -198,5 +202,33 @@ def test_the_reported_design_is_the_final_checks_best_on_the_fixed_worlds(runs, 
     printed = capsys.readouterr().out
     assert f'replaying candidate {best["candidate_id"]} ' in printed
     assert 'replay reproduces the recorded objectives bit for bit' in printed
+    assert main(['analyze', str(bag), '--out', str(tmp_path / 'report')]) == 0
+    report = (tmp_path / 'report' / 'report.md').read_text()
+    assert (f'Candidate {best["candidate_id"]} of generation 3, its final check on the fixed '
+            'worlds') in ' '.join(report.split())
     with pytest.raises(UserError, match=r'already finished \(maxiter=3, final_check=2\)'):
         resume_point(bag)
+
+
+def test_a_resampled_run_resumed_in_its_final_check_reports_the_same_design(runs, tmp_path):
+    bag = runs[0] / 'evaluators2'
+    mcap, = sorted(bag.glob('*.mcap'))
+    state = {'cut': False}
+
+    def keep(topic, log_time, message):  # the bag ends at the first answer of the check
+        if state['cut']:
+            return False
+        if topic == topics.EVALUATIONS and message.candidate_id >= 12:
+            state['cut'] = True
+        return True
+
+    interrupted = copy_bag(mcap, tmp_path / 'interrupted.mcap', keep=keep)
+    point = resume_point(interrupted)
+    assert point.search.checking and len(point.known) == 1 and len(point.to_evaluate) == 1
+    resumed = tmp_path / 'resumed'
+    finished = run_cli('run', '--resume', interrupted, '--evaluators', '2', '--bag', resumed)
+    assert finished.returncode == 0, finished.stdout + finished.stderr
+    result = json.loads((resumed / 'result.json').read_text())
+    expected = json.loads((bag / 'result.json').read_text())
+    for key in ('best_candidate_id', 'fitness', 'objectives', 'design', 'final_check'):
+        assert result[key] == expected[key], key

@@ -22,6 +22,10 @@ unseen worlds stay untouched for the measures of robustness. The last generation
 all: CMA-ES converges, so their bests are the candidates worth it, at a cost of `final_check`
 evaluations (default 5; fewer when the run has fewer generations).
 
+Both choices (a generation's best, the check's best) are by the weighted sum of the task's
+weights, also under MO-CMA-ES: a Pareto front of objectives measured on different draws
+would not compare either, so its point closest to zero is not the rule here.
+
 The check is a function of the objectives told, so replaying them (resume, analysis) re-derives
 it; `Search.checking` is true for its batch, whose summary has check = true.
 """

@@ -251,6 +251,10 @@ class WorldsSpec:
     draw of num_world_states worlds (core.worlds, core.resampling); the run's result is then
     the best, on the run's fixed worlds, of the best designs of the last `final_check`
     generations.
+
+    Whatever reads a candidate's objectives reads the aggregated ones: with 'worst' the
+    hierarchy's thresholds judge its checks' worst worlds, and a horizon grows once a share
+    of a generation tracks within the margins in its worst worlds, so later than on average.
     """
 
     aggregate: str = 'mean'
