@@ -131,7 +131,7 @@ def physics(summary):
                          if summary['hierarchy'] else '')
                       + (', stage 1 on the nominal world, then stage 2'
                          if budget['stages'] == 2 else '')
-                      + (', plus the final check of the resampled generations\' best designs'
+                      + (", plus the final check of the resampled generations' best designs"
                          if summary['world_scoring']['resample'] == 'generation' else '')
                       + f'): {budget["physics_steps"]:,} steps, '
                       f'{budget["simulated_time"]:,.0f} s simulated', '  '))
