@@ -163,6 +163,12 @@ def test_a_real_resampled_run_is_the_same_with_one_and_two_evaluators(runs):
     folder, outputs = runs
     one, two = folder / 'evaluators1', folder / 'evaluators2'
     assert 'final check on the fixed worlds' in outputs[1]
+    result = json.loads((one / 'result.json').read_text())
+    best, = [entry for entry in result['final_check']
+             if entry['candidate_id'] == result['best_candidate_id']]
+    assert (f'best design: candidate {best["candidate_id"]} of the final check (candidate '
+            f'{best["repeats"]} of generation {best["generation"]} on the fixed worlds), '
+            f'fitness') in outputs[1]
     assert summaries(one) == summaries(two)
     results = [json.loads((bag / 'result.json').read_text()) for bag in (one, two)]
     for key in ('best_candidate_id', 'fitness', 'objectives', 'design', 'final_check',
@@ -204,6 +210,7 @@ def test_the_reported_design_is_the_final_checks_best_on_the_fixed_worlds(runs, 
     assert 'replay reproduces the recorded objectives bit for bit' in printed
     assert main(['analyze', str(bag), '--out', str(tmp_path / 'report')]) == 0
     report = (tmp_path / 'report' / 'report.md').read_text()
+    assert 'a fresh draw per generation, then a final check of 2 designs on the fixed' in report
     assert (f'Candidate {best["candidate_id"]} of generation 3, its final check on the fixed '
             'worlds') in ' '.join(report.split())
     with pytest.raises(UserError, match=r'already finished \(maxiter=3, final_check=2\)'):

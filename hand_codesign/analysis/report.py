@@ -301,6 +301,13 @@ class Report:
                                            ' (budget per structure)'))
             elif self.task is not None:
                 facts.append(('structure', str(list(self.task.structure))))
+            if self.task is not None and self.task.worlds.resample != 'none':
+                checks = min(self.task.worlds.final_check, info.iterations)
+                facts.append(('worlds', f'a fresh draw per generation, then a final check of '
+                                        f'{checks} designs on the fixed worlds'))
+            if self.task is not None and self.task.worlds.aggregate == 'worst':
+                facts.append(('scoring', f'each objective over its worst '
+                                         f'{self.task.worlds.fraction:g} of the worlds (CVaR)'))
             if info.resumed_from:
                 facts.append(('resumed from', info.resumed_from))
         else:
