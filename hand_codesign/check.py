@@ -131,6 +131,8 @@ def physics(summary):
                          if summary['hierarchy'] else '')
                       + (', stage 1 on the nominal world, then stage 2'
                          if budget['stages'] == 2 else '')
+                      + (", plus the final check of the resampled generations' best designs"
+                         if summary['world_scoring']['resample'] == 'generation' else '')
                       + f'): {budget["physics_steps"]:,} steps, '
                       f'{budget["simulated_time"]:,.0f} s simulated', '  '))
     lines.append(indent(table(rows), 4))
@@ -186,6 +188,7 @@ def worlds_text(summary):
                     + [_vector(world['start']['position']),
                        _vector(world['start']['orientation'])])
     lines.append(indent(table(rows), 2))
+    lines.append(scoring_text(summary))
     if summary['goals_relative_to_start']:
         lines.append("goals in world coordinates (relative to the start: each world's goals "
                      'move and turn with its start):')
@@ -196,6 +199,23 @@ def worlds_text(summary):
         lines.append('goals in world coordinates (absolute: the same in every world):')
         lines.extend(f'  {goal_text(goal)}' for goal in worlds[0]['goals'])
     return '\n'.join(lines)
+
+
+def scoring_text(summary):
+    """Return how the worlds score a candidate and which worlds it meets (task `worlds`)."""
+    scoring = summary['world_scoring']
+    if scoring['aggregate'] == 'worst':
+        how = (f'each objective is the mean over its worst {scoring["fraction"]:g} of the '
+               'worlds (CVaR, worlds.aggregate: worst)')
+    else:
+        how = 'each objective is the mean over the worlds (eq. 5)'
+    if scoring['resample'] == 'generation':
+        which = ('each generation meets a fresh draw of as many worlds (worlds.resample: '
+                 'generation); the result is the best, on the worlds above (not trained '
+                 f'on), of the best designs of the last {scoring["final_check"]} generations')
+    else:
+        which = 'every candidate meets the training worlds above'
+    return wrap(f'scoring: {how}; {which}')
 
 
 def goal_text(goal):

@@ -14,6 +14,7 @@ from hand_codesign.core.robustness import world_values
 from hand_codesign.core.worlds import object_state, QUANTITIES
 import numpy as np
 import pytest
+import yaml
 
 TASKS = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'tasks'
 PRESETS = sorted(TASKS.glob('*.yaml'))
@@ -140,6 +141,29 @@ def test_overrides_and_early_termination_are_shown(capsys):
     summary = checked(capsys, str(TASKS / 'task3.yaml'), '--seed', '4', '--world-states', '2')
     seeded = load_task(TASKS / 'task3.yaml').replace(seed=4, num_world_states=2)
     assert summary['worlds'][1]['scale'] == world_states(seeded)[1].scale
+
+
+def test_the_world_scoring_is_shown(capsys, tmp_path):
+    assert main(['check', str(TASKS / 'task5.yaml')]) == 0
+    text = ' '.join(capsys.readouterr().out.split())
+    assert ('scoring: each objective is the mean over the worlds (eq. 5); every candidate '
+            'meets the training worlds above') in text
+    document = yaml.safe_load((TASKS / 'task5.yaml').read_text())
+    document['worlds'] = {'aggregate': 'worst', 'fraction': 0.25, 'resample': 'generation',
+                          'final_check': 3}
+    path = tmp_path / 'robust.yaml'
+    path.write_text(yaml.safe_dump(document))
+    assert main(['check', str(path), '--iterations', '4', '--popsize', '6']) == 0
+    text = ' '.join(capsys.readouterr().out.split())
+    assert ('each objective is the mean over its worst 0.25 of the worlds (CVaR, '
+            'worlds.aggregate: worst); each generation meets a fresh draw') in text
+    assert 'of the best designs of the last 3 generations' in text
+    summary = checked(capsys, str(path), '--iterations', '4', '--popsize', '6')
+    assert summary['world_scoring'] == {'aggregate': 'worst', 'fraction': 0.25,
+                                        'resample': 'generation', 'final_check': 3}
+    # 4 x 6 evaluations, then the final check of 3 designs on the 8 worlds
+    assert summary['budget']['evaluations'] == 4 * 6 + 3
+    assert summary['budget']['rollouts'] == (4 * 6 + 3) * 8
 
 
 def one_line_error(process, path):

@@ -9,6 +9,7 @@ from hand_codesign.core.resume import rebuild_search
 from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.search import Search
 import numpy as np
+import yaml
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASKS = ROOT / 'config' / 'tasks'
@@ -267,3 +268,38 @@ def test_a_two_stage_run_resumed_in_stage_two_ends_as_the_uninterrupted_run():
     assert outbox.result['best_candidate_id'] == uninterrupted.candidate_id
     assert outbox.result['fitness'] == uninterrupted.fitness
     assert outbox.result['stop_reason'] == 'stage=2, maxiter=2'
+
+
+def test_a_resampled_run_sends_each_generations_draw_and_reports_its_final_check(tmp_path):
+    document = yaml.safe_load((TASKS / 'task5.yaml').read_text())
+    document['worlds'] = {'resample': 'generation', 'final_check': 2}
+    path = tmp_path / 'resampled.yaml'
+    path.write_text(yaml.safe_dump(document))
+    task, clock = load_run_task(path, 7, 3, 6, 3), Clock()
+    controller, outbox = start(task, clock)
+    sent_all = []
+    while outbox.result is None:
+        sent = outbox.take()
+        sent_all += sent
+        for candidate, evaluator, _, _, _ in sent:
+            # the objectives depend on the draw: each is easier than the one before
+            offset = 1.0 / candidate.world_draw if candidate.world_draw else 0.0
+            controller.evaluated(RUN, candidate.candidate_id, evaluator,
+                                 objectives_of(candidate.x, 2) + offset, 0.1)
+    draws = {candidate.candidate_id: candidate.world_draw for candidate, *_ in sent_all}
+    assert [draws[i] for i in range(20)] == [1] * 6 + [2] * 6 + [3] * 6 + [0, 0]
+    assert all(world_states == 0 for *_, world_states in sent_all)  # the run's count
+    result = outbox.result
+    checked = result['final_check']
+    assert [entry['candidate_id'] for entry in checked] == [18, 19]
+    assert result['best_candidate_id'] == min(checked, key=lambda e: e['fitness'])[
+        'candidate_id']
+    assert result['evaluations'] == 20 and result['stop_reason'] == 'maxiter=3, final_check=2'
+    # generations, the check (a check row, as a hierarchy's), then the final summary
+    assert [s['check'] for s in outbox.summaries] == [False, False, False, True, False]
+    final = outbox.summaries[-1]
+    assert final['final'] and final['best_id'] == result['best_candidate_id']
+    assert outbox.summaries[3]['best_id'] == result['best_candidate_id']
+    assert any(text.startswith('final check on the fixed worlds of the best designs of the '
+                               f'last 2 generations: candidate {result["best_candidate_id"]} ')
+               for _, text in outbox.lines)

@@ -1,5 +1,6 @@
 """Core objects to messages: what travels is what the core computed, through serialization."""
 
+import dataclasses
 import pathlib
 
 from hand_codesign.core.evaluate import evaluate
@@ -60,7 +61,9 @@ def test_a_candidate_message_carries_genome_structure_and_worlds():
     assert np.array_equal(np.asarray(message.genome), core_candidate().x)
     assert list(message.genome_names)[:2] == ['g0', 'g1']
     plain = candidate_message('run-1', core_candidate(), (2, 2), [], '', 0)
-    assert plain.world_states == 0
+    assert plain.world_states == 0 and plain.world_draw == 0
+    drawn = dataclasses.replace(core_candidate(), world_draw=5)
+    assert through_the_wire(candidate_message('run-1', drawn, (2, 2), [], '', 0)).world_draw == 5
 
 
 def test_an_evaluation_message_holds_the_core_evaluation_bit_for_bit():

@@ -8,9 +8,10 @@ import sys
 
 from hand_codesign.core import (evaluate, Evaluation, genome_spec, load_task, objective_names,
                                 world_states)
-from hand_codesign.core.task import PhysicsSpec
+from hand_codesign.core.task import parse_task, PhysicsSpec
 import numpy as np
 import pytest
+import yaml
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASKS = ROOT / 'config' / 'tasks'
@@ -77,6 +78,25 @@ def test_evaluation_has_the_contract_fields(task):
     assert penalty[0] == pytest.approx(expected, abs=1e-12)
     # the only goals are the last goals: their errors at the end are the world's objectives
     np.testing.assert_array_equal(result.final_errors, result.world_objectives)
+
+
+def test_the_worst_worlds_score_a_real_evaluation_as_cvar(task):
+    document = yaml.safe_load(task.source_text)
+    document['worlds'] = {'aggregate': 'worst', 'fraction': 0.5}
+    worst = parse_task(yaml.safe_dump(document), 'robust.yaml').replace(num_world_states=3)
+    for x in genomes(task, count=2, seed=11):
+        mean, cvar = evaluate(x, task), evaluate(x, worst)
+        assert not mean.collision and mean.unstable_worlds == 0
+        # the same worlds and rollouts, only combined otherwise
+        np.testing.assert_array_equal(mean.world_objectives, cvar.world_objectives)
+        penalty = mean.objectives - mean.world_objectives.mean(axis=0)
+        # half of 3 worlds: the worst in full and the second worst at half weight, per
+        # objective, plus the same torque penalty
+        ordered = -np.sort(-cvar.world_objectives, axis=0)
+        expected = (ordered[0] + 0.5 * ordered[1]) / 1.5 + penalty
+        np.testing.assert_allclose(cvar.objectives, expected, rtol=1e-12, atol=1e-15)
+        assert np.all(cvar.objectives >= mean.objectives)
+        assert cvar.fitness == pytest.approx(float(cvar.objectives @ worst.objective_weights))
 
 
 def test_bit_identical_in_other_processes_and_orders(task):

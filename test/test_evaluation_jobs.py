@@ -9,6 +9,7 @@ from hand_codesign.core.evaluation_jobs import evaluation_job
 from hand_codesign.core.evaluation_jobs import EvaluatorInbox
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.worlds import world_states
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import RunInfo
 import numpy as np
@@ -55,6 +56,15 @@ def test_a_check_candidate_is_evaluated_on_the_worlds_it_names(run):
     run_info, task = run
     job = evaluation_job(run_info, candidate(world_states=5))
     assert job.task.num_world_states == 5 and job.task.seed == task.seed
+
+
+def test_a_resampled_candidate_is_evaluated_on_the_draw_it_names(run):
+    run_info, task = run
+    job = evaluation_job(run_info, candidate(world_draw=4))
+    assert job.task.world_draw == 4 and job.task.num_world_states == 3
+    assert world_states(job.task) == world_states(task.replace(world_draw=4))
+    assert world_states(job.task) != world_states(task)
+    assert evaluation_job(run_info, candidate()).task.world_draw == 0
 
 
 def test_another_structure_gets_its_own_genome(run):

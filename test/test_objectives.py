@@ -67,6 +67,28 @@ def test_combining_worlds_equation_5():
     assert weighted_fitness([0.2, 1.0], [1.0, 0.1]) == pytest.approx(0.3)
 
 
+def test_the_worst_fraction_of_the_worlds_is_their_cvar():
+    # 4 worlds x 2 objectives; each objective takes its own worst worlds
+    values = np.array([[1.0, 10.0], [4.0, 20.0], [2.0, 40.0], [3.0, 30.0]])
+    # a quarter of 4 worlds: the worst one; a half: the worst two
+    assert list(combine_worlds(values, fraction=0.25)) == [4.0, 40.0]
+    assert combine_worlds(values, 0.01, fraction=0.5) == pytest.approx([3.51, 35.01])
+    # 1.5 worlds: the worst in full, the second worst with weight 0.5 (Rockafellar-Uryasev)
+    assert combine_worlds(values, fraction=0.375) == pytest.approx([5.5 / 1.5, 55.0 / 1.5])
+    # under one world: still the worst world; all of them: eq. (5), bit for bit
+    assert list(combine_worlds(values, fraction=0.1)) == [4.0, 40.0]
+    assert combine_worlds(values, 0.01, fraction=1.0).tobytes() == combine_worlds(
+        values, 0.01).tobytes() == (0.01 + values.mean(axis=0)).tobytes()
+    # the tail mean never falls as the tail shrinks
+    tails = [combine_worlds(values, fraction=f) for f in (1.0, 0.8, 0.5, 0.3, 0.25)]
+    assert all(np.all(a <= b) for a, b in zip(tails, tails[1:]))
+    # 0.1 of 30 worlds is 3 worlds, whatever the rounding of 0.1 * 30
+    many = np.arange(30.0).reshape(30, 1)
+    assert list(combine_worlds(many, fraction=0.1)) == [28.0]
+    assert list(combine_worlds(values, 0.01, collision=True, fraction=0.25)) == [
+        COLLISION_PENALTY] * 2
+
+
 def test_slerp():
     half = slerp(IDENTITY, about(Z, math.pi / 2), 0.5)
     assert orientation_angle(half, about(Z, math.pi / 4)) == pytest.approx(0.0, abs=1e-7)

@@ -72,7 +72,7 @@ def test_the_signed_bytes_are_those_the_msg_comment_spells():
         # the design in physical terms, all empty here: names, values, URDF, controller
         + struct.pack('<II', 0, 0) + string('') * 3 + struct.pack('<Q', 0)
         + struct.pack('<IIII', 0, 0, 0, 0)
-        + struct.pack('<QQ', 0, 0))  # stage, held_out_worlds
+        + struct.pack('<QQQ', 0, 0, 0))  # stage, held_out_worlds, world_draw
     key = hmac.new(SECRET, b'evaluator\x00' + 'é'.encode(), hashlib.sha256).digest()
     expected = hmac.new(key, candidate_bytes + hashlib.sha256(run_bytes).digest(),
                         hashlib.sha256).digest()
@@ -101,6 +101,11 @@ def test_a_candidate_holds_only_for_its_evaluator_its_run_and_its_fields():
     assert not other.candidate_valid(message, digest)
     assert not mine.candidate_valid(message, hashlib.sha256(b'another RunInfo').digest())
     message.genome = [0.5, 0.5, 0.25]
+    assert not mine.candidate_valid(message, digest)
+    message = signer.candidate(Candidate(run_id='run-1', candidate_id=4, genome=[0.5] * 3,
+                                         evaluator_id='evaluator-0', world_draw=3))
+    assert mine.candidate_valid(message, digest)
+    message.world_draw = 0  # other worlds than the optimizer asked for
     assert not mine.candidate_valid(message, digest)
     assert mine.run_info_valid(run)
     run.seed = 8

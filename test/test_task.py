@@ -4,7 +4,7 @@ import math
 import pathlib
 
 from hand_codesign.core import genome_spec, load_task, parse_task, Task, TaskError
-from hand_codesign.core.task import PhysicsSpec
+from hand_codesign.core.task import PhysicsSpec, WorldsSpec
 import pytest
 import yaml
 
@@ -80,6 +80,34 @@ def test_physics_defaults_are_table_one_and_a_section_overrides_them(tmp_path):
     document['physics'] = {'solver_iterations': 5}
     task = load_task(write_task(tmp_path, document, 'fast.yaml'))
     assert task.physics == PhysicsSpec(solver_iterations=5, contact_breaking_threshold=0.02)
+
+
+def test_worlds_default_to_the_mean_on_fixed_worlds_and_a_section_sets_them(tmp_path):
+    for path in sorted(TASK5.parent.glob('*.yaml')):  # every preset keeps eq. (5)
+        assert load_task(path).worlds == WorldsSpec('mean', 1.0, 'none', 5), path.name
+    document = task5_document()
+    document['worlds'] = {'aggregate': 'worst', 'fraction': 0.25, 'resample': 'generation',
+                          'final_check': 3}
+    task = load_task(write_task(tmp_path, document, 'robust.yaml'))
+    assert task.worlds == WorldsSpec('worst', 0.25, 'generation', 3)
+    assert task.worlds.worst_fraction == 0.25 and WorldsSpec().worst_fraction == 1.0
+
+
+def test_resampled_worlds_do_not_combine_with_a_hierarchy_two_stages_or_a_horizon(tmp_path):
+    for name, expected in (('task4.yaml', 'a hierarchy'), ('task5.yaml', 'two stages'),
+                           ('task3.yaml', 'a horizon')):
+        document = yaml.safe_load((TASK5.parent / name).read_text())
+        document['worlds'] = {'resample': 'generation'}
+        document['two_stage'] = name == 'task5.yaml'
+        path = write_task(tmp_path, document, name)
+        with pytest.raises(TaskError, match=rf'{name}: worlds.resample: expected none in a '
+                           rf'task with {expected} \(not supported'):
+            load_task(path)
+    task = load_task(TASK5)
+    with pytest.raises(TaskError, match='world_draw: expected 0 for the held-out worlds'):
+        task.replace(world_draw=2, held_out=True)
+    with pytest.raises(TaskError, match='world_draw: expected an integer >= 0'):
+        task.replace(world_draw=-1)
 
 
 def test_angles_take_pi_expressions():
@@ -186,6 +214,22 @@ BAD_VALUES = [
     ('physics', {'contact_breaking_threshold': -0.01}, 'physics.contact_breaking_threshold: '
      'expected a positive number, got -0.01'),
     ('physics', {'substeps': 2}, 'physics.substeps: expected no such key'),
+    ('worlds', {'aggregate': 'worst'}, 'worlds.fraction: expected this key with aggregate: '
+     'worst'),
+    ('worlds', {'aggregate': 'worst', 'fraction': 0}, 'worlds.fraction: expected a fraction '
+     'in (0, 1], got 0'),
+    ('worlds', {'aggregate': 'worst', 'fraction': 1.5}, 'worlds.fraction: expected a fraction '
+     'in (0, 1], got 1.5'),
+    ('worlds', {'aggregate': 'worst', 'fraction': 'a quarter'}, 'worlds.fraction: expected a '
+     "number, got 'a quarter'"),
+    ('worlds', {'fraction': 0.5}, 'worlds.fraction: expected no fraction with aggregate: mean'),
+    ('worlds', {'aggregate': 'median'}, 'worlds.aggregate: expected one of mean, worst'),
+    ('worlds', {'resample': 'always'}, 'worlds.resample: expected one of none, generation'),
+    ('worlds', {'final_check': 3}, 'worlds.final_check: expected no final_check without '
+     'resample: generation'),
+    ('worlds', {'resample': 'generation', 'final_check': 0}, 'worlds.final_check: expected a '
+     'positive integer, got 0'),
+    ('worlds', {'resample': 'generation', 'repeats': 2}, 'worlds.repeats: expected no such key'),
 ]
 
 

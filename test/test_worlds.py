@@ -4,6 +4,7 @@ import math
 import pathlib
 
 from hand_codesign.core import grid_world_states, load_task, world_states, WorldState
+from hand_codesign.core.measures import unseen_world_states
 from hand_codesign.core.objectives import orientation_angle
 from hand_codesign.core.task import resting_height
 from hand_codesign.core.worlds import object_state, randomized_quantities
@@ -80,3 +81,28 @@ def test_midair_object_moves_by_its_delta():
     expected = np.array(task.object_spec.position) + world.position_delta
     assert state.position == pytest.approx(tuple(expected))
     assert state.size == pytest.approx((0.02 * world.scale, 0.15 * world.scale))
+
+
+@pytest.mark.parametrize('seed', [0, 1, 7, 21])
+def test_resampled_draws_differ_per_generation_and_from_every_other_stream(seed):
+    task = load_task(TASKS / 'task5.yaml').replace(seed=seed)
+    draws = [world_states(task.replace(world_draw=k)) for k in (1, 2, 3)]
+    assert world_states(task.replace(world_draw=2)) == draws[1]  # a pure function of (seed, k)
+    assert all(len(draw) == task.num_world_states for draw in draws)
+    others = {'fixed': world_states(task), 'held out': world_states(task.replace(held_out=True)),
+              'unseen': unseen_world_states(task, task.num_world_states)}
+    sets = {f'draw {k}': draw for k, draw in zip((1, 2, 3), draws)}
+    sets.update(others)
+    rows = {name: as_rows(worlds) for name, worlds in sets.items()}
+    names = sorted(rows)
+    for index, first in enumerate(names):
+        for second in names[index + 1:]:
+            # continuous draws: no world of one stream is a world of another
+            assert not np.isin(rows[first][:, 0], rows[second][:, 0]).any(), (first, second)
+    # another seed draws other worlds for the same generation
+    assert world_states(task.replace(seed=seed + 100, world_draw=1)) != draws[0]
+    # the first worlds of a larger draw are those of a smaller one, as for the fixed set
+    assert world_states(task.replace(world_draw=2, num_world_states=20))[:8] == draws[1]
+    # stage 1 of a two-stage task stays on the nominal world, whatever the draw
+    assert world_states(task.replace(two_stage=True, stage=1, world_draw=3)) == [
+        WorldState.nominal()]

@@ -78,18 +78,20 @@ class RunInfo:
     log_time: int       # ns since the epoch, when the recorder received it
 
     def task(self, structure=None, source='bag:run_info', world_states=None, horizon=None,
-             stage=0, held_out=False):
+             stage=0, held_out=False, world_draw=0):
         """
         Return the Task the run used: its task text with the run's overrides applied.
 
         `structure` and `world_states` (e.g. a hierarchy check's) replace the run's;
         `horizon` is a candidate's sub-problem (Candidate.horizon); `stage` and `held_out` its
-        stage and world stream (Candidate.stage, Candidate.held_out_worlds).
+        stage and world stream (Candidate.stage, Candidate.held_out_worlds), `world_draw` its
+        resampled worlds (Candidate.world_draw).
         """
         return run_task(self.task_yaml, source=source, seed=self.seed,
                         iterations=self.iterations, population=self.population,
                         world_states=world_states or self.world_states, structure=structure,
-                        horizon=horizon, stage=stage, held_out=held_out)
+                        horizon=horizon, stage=stage, held_out=held_out,
+                        world_draw=world_draw)
 
 
 class Table:

@@ -81,12 +81,12 @@ def require_run_info(record, purpose):
 
 
 def run_task_of(record, structure=None, world_states=None, horizon=None, stage=0,
-                held_out=False):
+                held_out=False, world_draw=0):
     """Return the Task of the run (for `structure`, `world_states`, ... when given)."""
     info = require_run_info(record, 'rebuilding the task')
     try:
         return info.task(structure, f'{record.path} (RunInfo.task_yaml)', world_states,
-                         horizon, stage, held_out)
+                         horizon, stage, held_out, world_draw)
     except (TaskError, ValueError) as error:
         raise UserError(f'{record.path}: the task recorded in the bag cannot be rebuilt: '
                         f'{error}') from None
@@ -290,6 +290,7 @@ class RecordedDesign:
     evaluator_id: str
     stage: int = 0               # of a two-stage task (core.stages); 0: one stage, older bags
     held_out: bool = False       # evaluated on the held-out worlds (a hierarchy check)
+    world_draw: int = 0          # its resampled worlds (Candidate.world_draw); 0: the fixed ones
 
 
 def recorded_design(record, candidate_id):
@@ -328,6 +329,7 @@ def recorded_design(record, candidate_id):
         horizon=float(candidate.get('horizon', 0.0) or 0.0),
         stage=int(candidate.get('stage', 0) or 0),
         held_out=bool(candidate.get('held_out_worlds', False)),
+        world_draw=int(candidate.get('world_draw', 0) or 0),
         x=np.asarray(candidate['genome'], dtype=float),
         genome_names=tuple(candidate['genome_names']), objective_names=names,
         objectives=objectives, fitness=fitness, world_objectives=world_objectives,
@@ -337,7 +339,8 @@ def recorded_design(record, candidate_id):
 def design_task(record, design):
     """Return the Task with which a RecordedDesign was evaluated."""
     return run_task_of(record, design.structure or None, design.world_states or None,
-                       design.horizon or None, design.stage, design.held_out)
+                       design.horizon or None, design.stage, design.held_out,
+                       design.world_draw)
 
 
 def last_summary(record):
@@ -392,11 +395,13 @@ def best_candidate_id(record):
 
     That is the optimizer's own choice in its last GenerationSummary (the lowest weighted sum
     for CMA-ES, the front's point closest to zero for MO-CMA-ES); for a hierarchy the best
-    design of the structure the hierarchy chose (the search replayed from the bag, as the run's
-    result); without summaries (a bag cut early) the OK evaluation of lowest fitness.
+    design of the structure the hierarchy chose, and for a run with resampled worlds the best
+    of its final check on the fixed worlds (core.resampling; the search replayed from the bag,
+    as the run's result, or its best so far when the run did not get there); without
+    summaries (a bag cut early) the OK evaluation of lowest fitness.
     """
     if record.run_info is not None:
-        best = _hierarchy_best(record)
+        best = _replayed_best(record)
         if best is not None:
             return best
     summary = last_summary(record)
@@ -410,13 +415,13 @@ def best_candidate_id(record):
     return int(rows.candidate_id[ok[np.argmin(rows.fitness[ok])]])
 
 
-def _hierarchy_best(record):
-    """Return the best design's id of a hierarchical run (replayed search), else None."""
+def _replayed_best(record):
+    """Return the best design's id of a hierarchical or resampled run (replayed), else None."""
     try:
         task = run_task_of(record)
     except UserError:
         return None
-    if task.hierarchy is None:
+    if task.hierarchy is None and task.worlds.resample == 'none':
         return None
     search = Search(task)
     try:

@@ -316,6 +316,13 @@ class Report:
                                            ' (budget per structure)'))
             elif self.task is not None:
                 facts.append(('structure', str(list(self.task.structure))))
+            if self.task is not None and self.task.worlds.resample != 'none':
+                checks = min(self.task.worlds.final_check, info.iterations)
+                facts.append(('worlds', f'a fresh draw per generation, then a final check of '
+                                        f'{checks} designs on the fixed worlds'))
+            if self.task is not None and self.task.worlds.aggregate == 'worst':
+                facts.append(('scoring', f'each objective over its worst '
+                                         f'{self.task.worlds.fraction:g} of the worlds (CVaR)'))
             if info.resumed_from:
                 facts.append(('resumed from', info.resumed_from))
             facts += restart_facts(self.restarts)
@@ -455,6 +462,10 @@ class Report:
             return lines + ['No design was evaluated successfully.']
         stage = (f' of stage {design.stage} ({STAGE_WORLDS[design.stage]})'
                  if design.stage else '')
+        if design.world_draw:
+            stage += f' on resampled worlds (draw {design.world_draw})'
+        elif self.task is not None and self.task.worlds.resample != 'none':
+            stage += ', its final check on the fixed worlds (the run resampled its worlds)'
         lines.append(f'Candidate {design.candidate_id} of generation {design.generation}{stage}, '
                      f'structure {list(design.structure)}, evaluated by '
                      f'{design.evaluator_id or "(no evaluation in the bag)"}'

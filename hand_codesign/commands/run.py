@@ -204,6 +204,12 @@ def best_design_line(result_file):
     """Return the line telling the user about the best design of a run's result.json."""
     result = json.loads(result_file.read_text())
     objectives = ', '.join(f'{name} {value:.4g}' for name, value in result['objectives'].items())
-    return (f'candidate {result["best_candidate_id"]} of generation {result["generation"]}, '
+    origin = f'generation {result["generation"]}'
+    checked = [entry for entry in result.get('final_check', ())
+               if entry['candidate_id'] == result['best_candidate_id']]
+    if checked:  # a resampled run: the design of a generation, scored on the fixed worlds
+        origin = (f'the final check (candidate {checked[0]["repeats"]} of generation '
+                  f'{checked[0]["generation"]} on the fixed worlds)')
+    return (f'candidate {result["best_candidate_id"]} of {origin}, '
             f'fitness {result["fitness"]:.4g} ({objectives}); '
             f'{len(result["design"])} parameters in {result_file}')

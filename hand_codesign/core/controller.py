@@ -194,7 +194,8 @@ class RunController:
             if self.adaptive_timeout and self.wall_times:
                 self.dispatcher.evaluation_timeout = max(
                     ADAPTIVE_MINIMUM, ADAPTIVE_FACTOR * max(self.wall_times))
-            world_states = self.search.batch_task.num_world_states if self.search.checking else 0
+            world_states = (self.search.batch_task.num_world_states
+                            if self.search.checking and self.search.hierarchical else 0)
             for candidate, evaluator_id, attempt in self.dispatcher.assignments(self.clock()):
                 self.attempts[candidate.candidate_id] = attempt + 1
                 self.outbox.send_candidate(candidate, evaluator_id, attempt, self.genome_names,
@@ -236,14 +237,22 @@ class RunController:
         stage = self.batch[0].stage
         self.batch = None
         elapsed = self.clock() - self.started
+        result = self.search.summary_result(optimizer)
         summary = generation_summary(
             generation, structure, self.task.objective_names, told_ids, objectives,
-            optimizer.result, self.told, elapsed, checking, horizon)
-        summary['best_design'] = self.best_design(structure, optimizer.result.x)
+            result, self.told, elapsed, checking, horizon)
+        summary['best_design'] = self.best_design(structure, result.x)
         summary.update(self.trust_counts(), audited_ids=sorted(self.audits.audited))
         summary['stage'] = stage  # for the progress line; the candidates carry it
         summary.update(restart_facts(optimizer, generation))
         self.outbox.send_summary(summary)
+        if checking and self.search.resampled:
+            self.outbox.log(
+                f'final check on the fixed worlds of the best designs of the last '
+                f'{len(told_ids)} generations: candidate {result.candidate_id} is the result, '
+                + ', '.join(f'{name} {value:.4g}'
+                            for name, value in zip(self.task.objective_names, result.objectives)))
+            return
         if checking:
             seeds = ', '.join(str(seed) for seed in self.search.outcomes[-1].seeds)
             self.outbox.log(
@@ -294,6 +303,9 @@ class RunController:
         return design_shapes(task, genome_spec(task).decode(x))
 
     def _result(self, result, structure, stop_reason):
+        checked = [{'candidate_id': design.check_id, 'repeats': design.candidate_id,
+                    'generation': design.generation, 'draw_fitness': design.draw_fitness,
+                    'fitness': design.fitness} for design in self.search.final_check]
         return {
             'run_id': self.run_id, 'task': self.task.name, 'seed': self.task.seed,
             'stop_reason': stop_reason, 'evaluations': self.told,
@@ -304,6 +316,7 @@ class RunController:
             'objectives': dict(zip(self.task.objective_names, result.objectives.tolist())),
             'design': genome_spec(self.task.replace(structure=structure)).design_values(
                 result.x),
+            **({'final_check': checked} if checked else {}),
         }
 
 

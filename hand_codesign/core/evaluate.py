@@ -5,7 +5,14 @@ The candidate's genome decodes into a Design; the Simulator builds its hand once
 start of every world for collisions (then every objective is COLLISION_PENALTY and nothing is
 simulated, eq. 5) and runs one rollout per world. Each world gives h_o per objective (eq. 5's
 inner mean, eq. 6 when early termination cut it, UNSTABLE_PENALTY when the simulation became
-unstable); the objectives are their mean over the worlds plus the torque penalty of eq. (2).
+unstable); the objectives are their mean over the worlds plus the torque penalty of eq. (2),
+or with `worlds: {aggregate: worst, fraction: f}` the mean over each objective's worst f of
+the worlds (CVaR, core.objectives.worst_mean) plus that penalty.
+
+An unstable world counts UNSTABLE_PENALTY in its objectives. Under the mean it weighs 1 / n;
+under the worst fraction it is always among the worst worlds and weighs 1 / (f n), so f n <= 1
+scores a design with one unstable world like one that starts in collision (COLLISION_PENALTY,
+or that plus the torque penalty): both rank behind every design that stays stable.
 
 evaluate is a pure function of (x, task, worlds): the process-wide Simulator is reset and
 rebuilt for every candidate, so results are bit-identical in any process and in any order.
@@ -153,7 +160,7 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
         final[index] = schedule.pose_errors(result.final_position, result.final_orientation,
                                             state)
         final_poses[index] = (*result.final_position, *result.final_orientation)
-    objectives = combine_worlds(world_values, penalty)
+    objectives = combine_worlds(world_values, penalty, fraction=task.worlds.worst_fraction)
     return _evaluation(task, objectives, world_values, False, unstable_worlds,
                        steps * task.time_step, initial.copy(), final, final_poses)
 

@@ -45,7 +45,7 @@ class EvaluationJob:
 def job_key(candidate):
     """Return the fields of a Candidate that decide its task (with the run's RunInfo)."""
     return (candidate.run_id, tuple(candidate.structure), candidate.world_states,
-            candidate.horizon, _stage(candidate), _held_out(candidate))
+            candidate.horizon, _stage(candidate), _held_out(candidate), _world_draw(candidate))
 
 
 def _stage(candidate):
@@ -57,13 +57,18 @@ def _held_out(candidate):
     return bool(getattr(candidate, 'held_out_worlds', getattr(candidate, 'held_out', False)))
 
 
+def _world_draw(candidate):
+    # 0 (the run's fixed worlds) from a sender older than the field, as for `stage`
+    return int(getattr(candidate, 'world_draw', 0))
+
+
 def candidate_task(run, candidate):
     """Return (Task, GenomeSpec) a candidate of run is evaluated with; CandidateRejected."""
     try:
         task = run_task(run.task_yaml, f'run {run.run_id} task', run.seed, run.iterations,
                         run.population, candidate.world_states or run.world_states,
                         tuple(candidate.structure) or None, candidate.horizon,
-                        _stage(candidate), _held_out(candidate))
+                        _stage(candidate), _held_out(candidate), _world_draw(candidate))
         return task, genome_spec(task)
     except ValueError as error:
         raise CandidateRejected(f'unusable structure or task: {error}')

@@ -118,17 +118,50 @@ def orientation_angle(actual, desired):
     return np.arccos(np.clip(2.0 * inner * inner - 1.0, -1.0, 1.0))
 
 
-def combine_worlds(world_values, penalty=0.0, collision=False):
+def combine_worlds(world_values, penalty=0.0, collision=False, fraction=1.0):
     """
     Return eq. (5): the objective vector from per-world h_o values (worlds x objectives).
 
     Every objective is COLLISION_PENALTY for a design that starts in collision, otherwise
-    the torque penalty plus the mean over the worlds.
+    the torque penalty plus the mean over the worlds, or with `fraction` < 1 (the task's
+    worlds.aggregate: worst) plus `worst_mean`, the mean over the worst `fraction` of them.
     """
     world_values = np.asarray(world_values, dtype=float)
     if collision:
         return np.full(world_values.shape[-1], COLLISION_PENALTY)
-    return penalty + world_values.mean(axis=0)
+    if fraction >= 1.0:
+        return penalty + world_values.mean(axis=0)
+    return penalty + worst_mean(world_values, fraction)
+
+
+def worst_mean(world_values, fraction):
+    """
+    Return per objective the mean over the worst `fraction` of the worlds: CVaR at 1 - fraction.
+
+    Rockafellar and Uryasev (2000, "Optimization of conditional value-at-risk", J. Risk 2(3))
+    define the conditional value at risk of a loss as its mean in the upper tail of
+    probability `fraction`; for n equally likely worlds that tail holds k = fraction * n
+    worlds: the floor(k) worst in full and the next worst with the weight k - floor(k), all
+    divided by k (Rockafellar and Uryasev 2002, J. Banking & Finance 26, for discrete
+    distributions). It is continuous in `fraction`, is the mean at 1 and the worst world as
+    fraction * n approaches 1 (at or below it). Each objective takes its own worst worlds. As a
+    robust-design objective it is the risk-averse middle between the mean (the paper's
+    eq. 5) and the worst case of min-max robust optimization (Ben-Tal, El Ghaoui and
+    Nemirovski 2009, Robust Optimization).
+    """
+    world_values = np.asarray(world_values, dtype=float)
+    count = world_values.shape[0]
+    tail = float(fraction) * count
+    if abs(tail - round(tail)) < 1e-9:  # 0.1 * 30 is 3.0000000000000004
+        tail = float(round(tail))
+    tail = min(max(tail, 1e-12), float(count))
+    whole = int(np.floor(tail))
+    weights = np.zeros(count)
+    weights[:whole] = 1.0
+    if whole < count:
+        weights[whole] = tail - whole
+    descending = -np.sort(-world_values, axis=0)
+    return weights @ descending / tail
 
 
 def weighted_fitness(objectives, weights):

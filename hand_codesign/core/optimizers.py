@@ -80,6 +80,7 @@ class Candidate:
     horizon: float = 0.0  # s, the sub-problem it is evaluated on (core.horizon); 0: none
     stage: int = 0  # of a two-stage task (core.stages): 1 nominal world, 2 randomized; 0: none
     held_out: bool = False  # evaluated on the held-out worlds (a hierarchy structure's check)
+    world_draw: int = 0  # its worlds' draw (core.worlds; worlds.resample); 0: the fixed worlds
 
 
 @dataclasses.dataclass(frozen=True)

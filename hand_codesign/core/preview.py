@@ -14,6 +14,8 @@ mapping of plain lists, numbers and strings, ready for JSON::
                         orientation or None, objectives}] in world coordinates, and `samples`:
                         every goal sample a trajectory objective scores, also in world
                         coordinates
+    world_scoring       {aggregate, fraction, resample, final_check}: the task's `worlds`
+                        (the mean or the worst fraction of the worlds; fixed or resampled)
     hierarchy           the structures a hierarchy search may visit, e.g. [[1], [2], [1, 1]],
                         in order: its path, then the structures it may grow a finger to
                         ([1, 1, 3]); [] for a fixed structure
@@ -79,6 +81,10 @@ def preview(task):
         'samples_per_second': task.goals.samples_per_second,
         'randomization': randomization(task),
         'worlds': worlds(task, schedule),
+        'world_scoring': {'aggregate': task.worlds.aggregate,
+                          'fraction': task.worlds.worst_fraction,
+                          'resample': task.worlds.resample,
+                          'final_check': task.worlds.final_check},
         'hierarchy': [list(structure) for structure in path + grown],
         'hierarchy_grown': {'count': min(GROWN_FROM, len(grown)),
                             'choices': [list(structure) for structure in grown]},
@@ -144,7 +150,8 @@ def structure_budget(task, structure, path):
     Return the genome and budget of one structure, building its optimizer as a run does.
 
     A hierarchy's structure is optimized REPEATS times and costs the check of its best design
-    on the evaluation worlds; a two-stage task's stage 1 evaluates on the nominal world only.
+    on the evaluation worlds; a two-stage task's stage 1 evaluates on the nominal world only;
+    resampled worlds cost the final check of the last generations' best designs.
     """
     structure_task = task.replace(structure=tuple(structure)) if path else task
     spec = genome_spec(structure_task)
@@ -156,7 +163,11 @@ def structure_budget(task, structure, path):
         evaluations, rollouts = 2 * one, one * (1 + structure_task.num_world_states)
     else:
         evaluations, rollouts = one, one * structure_task.num_world_states
+    checks = 1 if path else 0
     check_rollouts = task.hierarchy.evaluation_world_states if path else 0
+    if task.worlds.resample == 'generation':  # the final check of the resampled generations
+        checks = min(task.worlds.final_check, structure_task.iterations)
+        rollouts += checks * structure_task.num_world_states
     seeded = optimizer.x0.tolist() != spec.initial_mean().tolist()
     steps = rollout_steps(structure_task)
     return {
@@ -164,7 +175,7 @@ def structure_budget(task, structure, path):
         'genome': genome(spec),
         'genome_size': spec.size,
         'start': 'seed design' if seeded else 'centre of the bounds',
-        'evaluations': evaluations + (1 if path else 0),
+        'evaluations': evaluations + checks,
         'rollouts': rollouts + check_rollouts,
         'physics_steps': (rollouts + check_rollouts) * steps,
         'check_world_states': check_rollouts,

@@ -275,7 +275,8 @@ class RigTrials:
 
     def _evaluation(self, world_values, collision):
         task = self.task
-        objectives = combine_worlds(world_values, self.penalty, collision)
+        objectives = combine_worlds(world_values, self.penalty, collision,
+                                    task.worlds.worst_fraction)
         empty = np.zeros((len(self.specs), 2))
         measured = sum(float(times[-1]) for times, _, _ in self.traces if len(times))
         return Evaluation(objectives=np.asarray(objectives, dtype=float),

@@ -15,10 +15,10 @@ VERSIONED_PACKAGES = ['hand_codesign', 'pybullet', 'cma', 'deap', 'numpy']
 
 
 def run_task(task_yaml, source, seed, iterations, population, world_states, structure=None,
-             horizon=None, stage=0, held_out=False):
+             horizon=None, stage=0, held_out=False, world_draw=0):
     """Return the Task of a run from its task text and overrides (0 or None keeps the file's)."""
     return with_overrides(parse_task(task_yaml, source=source), seed, iterations, population,
-                          world_states, structure, horizon, stage, held_out)
+                          world_states, structure, horizon, stage, held_out, world_draw)
 
 
 def load_run_task(path, seed=None, iterations=None, population=None, world_states=None):
@@ -29,12 +29,13 @@ def load_run_task(path, seed=None, iterations=None, population=None, world_state
 
 
 def with_overrides(task, seed, iterations, population, world_states, structure=None,
-                   horizon=None, stage=0, held_out=False):
+                   horizon=None, stage=0, held_out=False, world_draw=0):
     """
     Return task with a run's overrides applied (0 or None keeps the task's value).
 
     `horizon` (s) is a candidate's sub-problem (Candidate.horizon, core.horizon); `stage` and
-    `held_out` are a candidate's stage and world stream (Candidate.stage, held_out_worlds).
+    `held_out` are a candidate's stage and world stream (Candidate.stage, held_out_worlds);
+    `world_draw` its resampled worlds (Candidate.world_draw; 0: the run's fixed worlds).
     """
     changes = {'seed': int(seed)}
     if iterations:
@@ -51,6 +52,8 @@ def with_overrides(task, seed, iterations, population, world_states, structure=N
         changes['stage'] = int(stage)
     if held_out:
         changes['held_out'] = True
+    if world_draw:
+        changes['world_draw'] = int(world_draw)
     return task.replace(**changes)
 
 

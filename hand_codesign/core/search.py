@@ -9,7 +9,10 @@ early_termination.horizon the batch task also holds the sub-problem's horizon (c
 which grows from what `tell()` was told and which every candidate of the batch carries. A
 task with `two_stage` runs core.stages.StagedSearch: each candidate also carries its stage, and
 the horizon carries on from stage 1 into stage 2 (stage 2 starts at stage 1's design, which
-tracks the goals up to that horizon on the nominal world).
+tracks the goals up to that horizon on the nominal world). A task with
+`worlds: {resample: generation}` runs core.resampling.ResampledSearch: each candidate carries
+its generation's draw of worlds (Candidate.world_draw), and a final check on the fixed worlds
+chooses the run's result.
 """
 
 import dataclasses
@@ -18,6 +21,7 @@ from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.hierarchy import HierarchySearch
 from hand_codesign.core.horizon import Horizon
 from hand_codesign.core.optimizers import make_optimizer
+from hand_codesign.core.resampling import ResampledSearch
 from hand_codesign.core.stages import StagedSearch
 
 
@@ -30,6 +34,8 @@ class Search:
             self._driver = HierarchySearch(task, first_id=first_id)
         elif task.two_stage:
             self._driver = StagedSearch(task, first_id=first_id)
+        elif task.worlds.resample == 'generation':
+            self._driver = ResampledSearch(task, first_id=first_id)
         else:
             self._driver = make_optimizer(task, genome_spec(task).size, first_id=first_id)
         early = task.early_termination
@@ -46,6 +52,10 @@ class Search:
         return isinstance(self._driver, StagedSearch)
 
     @property
+    def resampled(self):
+        return isinstance(self._driver, ResampledSearch)
+
+    @property
     def stage(self):
         """Return the stage of the batch of `ask()` (0 for a single-stage task)."""
         return self._driver.stage if self.staged else 0
@@ -53,12 +63,14 @@ class Search:
     @property
     def optimizer(self):
         """Return the optimizer of the structure (or stage) being searched."""
-        return self._driver.optimizer if self.hierarchical or self.staged else self._driver
+        if self.hierarchical or self.staged or self.resampled:
+            return self._driver.optimizer
+        return self._driver
 
     @property
     def checking(self):
-        """Return True when the batch is the check of a structure's best design."""
-        return self.hierarchical and self._driver.checking
+        """Return True when the batch is a check: a structure's best design, or resampling's."""
+        return (self.hierarchical or self.resampled) and self._driver.checking
 
     @property
     def batch_task(self):
@@ -69,7 +81,7 @@ class Search:
                 self._horizon.current, task)
         if self._horizon is not None:
             return self._horizon.batch_task
-        return self._driver.evaluation_task if self.hierarchical else self.task
+        return self._driver.evaluation_task if self.hierarchical or self.resampled else self.task
 
     @property
     def horizon(self):
@@ -95,7 +107,8 @@ class Search:
             horizon = self.horizon or 0.0
             self._batch = [dataclasses.replace(candidate, structure=task.structure,
                                                horizon=horizon, stage=task.stage,
-                                               held_out=task.held_out)
+                                               held_out=task.held_out,
+                                               world_draw=task.world_draw)
                            for candidate in self._driver.ask()]
         return list(self._batch)
 
@@ -122,5 +135,21 @@ class Search:
         if self.hierarchical and self._driver.result is not None:
             outcome = self._driver.result
             return outcome.result, outcome.structure
-        result = self.optimizer.result
+        result = self._driver.result if self.resampled else self.optimizer.result
         return None if result is None else (result, self.batch_task.structure)
+
+    @property
+    def final_check(self):
+        """Return the CheckedDesigns of a resampled run's final check once told, else []."""
+        return list(self._driver.checked) if self.resampled else []
+
+    def summary_result(self, optimizer):
+        """
+        Return the OptimizerResult a batch's summary reports, after its tell.
+
+        `optimizer` is the one the batch was asked from: its best so far, or for a resampled
+        run once its final check is told, the check's best (the run's result).
+        """
+        if self.resampled and self._driver.checked:
+            return self._driver.result
+        return optimizer.result

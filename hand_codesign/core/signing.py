@@ -51,7 +51,8 @@ SIGNED_FIELDS = {
         ('design_values', 'f[]'), ('hand_urdf', 's'), ('controller_kind', 's'),
         ('controller_mode', 's'), ('gravity_compensation', 'u'),
         ('controller_knot_times', 'f[]'), ('controller_values', 'f[]'), ('controller_kp', 'f[]'),
-        ('controller_kd', 'f[]'), ('stage', 'u'), ('held_out_worlds', 'u')),
+        ('controller_kd', 'f[]'), ('stage', 'u'), ('held_out_worlds', 'u'),
+        ('world_draw', 'u')),
     EVALUATION_TYPE: (
         ('run_id', 's'), ('generation', 'u'), ('candidate_id', 'u'), ('attempt', 'u'),
         ('evaluator_id', 's'), ('status', 'u'), ('reason', 's'), ('objectives', 'f[]'),

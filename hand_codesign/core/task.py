@@ -80,6 +80,9 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
     weights: {position: 1.0, orientation: 0.1}          # optional: w_p, w_r of the fitness
     physics: {solver_iterations: 50, contact_breaking_threshold: 0.02}   # optional: Bullet's
                                      # settings; these defaults reproduce the paper's runs
+    worlds: {aggregate: worst, fraction: 0.25, resample: generation, final_check: 5}
+                                     # optional; default {aggregate: mean, resample: none}, eq. 5
+                                     # on one fixed set of worlds. See below.
     optimizer:
       algorithm: cma                 # cma (weighted sum) | mocma (Pareto front) | ipop-cma |
                                      # bipop-cma (CMA-ES with restarts, core.restarts; the
@@ -108,6 +111,18 @@ randomized scale rests it at. `orientation_symmetry` says the object looks the s
 any multiple of 360 / order degrees about `axis` of its own frame (a cube: order 4 about each
 face normal): orientation goals then score the nearest of those turns (eq. 4 taken modulo the
 symmetry). Without it every turn counts, as in the paper.
+
+`worlds` decides how the worlds score a candidate and which worlds it meets:
+
+- `aggregate: mean` (default) averages each objective over the worlds, eq. (5);
+  `aggregate: worst` with `fraction: f` in (0, 1] averages it over the worst f of the worlds
+  only, its conditional value at risk (core.objectives.combine_worlds), so the search favours
+  designs that hold up in their bad worlds rather than on average.
+- `resample: none` (default) evaluates every candidate on the same `num_world_states` worlds
+  of the seed; `resample: generation` draws fresh worlds for each generation (another stream of
+  the seed, core.worlds), so the design cannot fit one set of worlds. The run then reports the
+  best, re-evaluated on the fixed worlds, of the best designs of the last `final_check`
+  (default 5) generations (core.resampling). Not with a hierarchy, two stages or a horizon.
 
 A parameter setting is one of:
 
@@ -154,7 +169,8 @@ from hand_codesign.core.task_spec import (ALGORITHMS, AXES, Bounds, DISTANCES,
                                           ParameterSpec, PhysicsSpec, POLICY_KINDS, PolicySpec,
                                           PositionGoal, RandomizationSpec, resting_height,
                                           RESTING_TOLERANCE, SHAPES, STARTS, SymmetrySpec, Task,
-                                          TaskError, TORQUE_MODES, TorquePenaltySpec, WeightsSpec)
+                                          TaskError, TORQUE_MODES, TorquePenaltySpec, WeightsSpec,
+                                          WORLD_AGGREGATES, WORLD_RESAMPLING, WorldsSpec)
 
 __all__ = [
     'ALGORITHMS', 'AXES', 'axis_angle_quaternion', 'Bounds', 'DISTANCES', 'EarlyTerminationSpec',
@@ -162,5 +178,6 @@ __all__ = [
     'MorphologySpec', 'ObjectSpec', 'OrientationGoal', 'PARAMETER_MODES', 'ParameterSpec',
     'parse_design', 'parse_task', 'PhysicsSpec', 'POLICY_KINDS', 'PolicySpec', 'PositionGoal',
     'RandomizationSpec', 'resting_height', 'RESTING_TOLERANCE', 'SHAPES', 'STARTS', 'SymmetrySpec',
-    'Task', 'TaskError', 'TORQUE_MODES', 'TorquePenaltySpec', 'WeightsSpec',
+    'Task', 'TaskError', 'TORQUE_MODES', 'TorquePenaltySpec', 'WeightsSpec', 'WORLD_AGGREGATES',
+    'WORLD_RESAMPLING', 'WorldsSpec',
 ]

@@ -58,6 +58,24 @@ def check_task(task):
         _check_hierarchy(task.hierarchy, fail)
     _check_horizon(task, fail)
     _check_stages(task, fail)
+    _check_worlds(task, fail)
+
+
+def _check_worlds(task, fail):
+    if task.worlds.resample != 'none':
+        early = task.early_termination
+        for present, what in ((task.hierarchy is not None, 'a hierarchy'),
+                              (task.two_stage, 'two stages'),
+                              (early is not None and early.horizon is not None, 'a horizon')):
+            if present:
+                fail('worlds.resample', f'none in a task with {what} (not supported: the '
+                     'final check of resampled generations assumes one optimization on full '
+                     f'rollouts), got {task.worlds.resample!r}')
+    draw = task.world_draw
+    if isinstance(draw, bool) or not isinstance(draw, (int, np.integer)) or draw < 0:
+        fail('world_draw', f'an integer >= 0 (0: the fixed worlds), got {draw!r}')
+    if draw and task.held_out:
+        fail('world_draw', f'0 for the held-out worlds (one stream or the other), got {draw!r}')
 
 
 def _check_stages(task, fail):

@@ -21,7 +21,8 @@ from hand_codesign.core.task_spec import (ALGORITHMS, AXES, Bounds, DISTANCES,
                                           ObjectSpec, OrientationGoal, ParameterSpec, PhysicsSpec,
                                           POLICY_KINDS, PolicySpec, PositionGoal,
                                           RandomizationSpec, SHAPES, STARTS, SymmetrySpec, Task,
-                                          TaskError, TORQUE_MODES, TorquePenaltySpec, WeightsSpec)
+                                          TaskError, TORQUE_MODES, TorquePenaltySpec, WeightsSpec,
+                                          WORLD_AGGREGATES, WORLD_RESAMPLING, WorldsSpec)
 import numpy as np
 import yaml
 
@@ -167,7 +168,7 @@ class _Reader:
             'name', 'seed', 'time_step', 'duration', 'object', 'hand', 'goals',
             'randomization', 'num_world_states', 'morphology', 'policy', 'optimizer'),
             optional=('description', 'torque_penalty', 'early_termination', 'weights',
-                      'hierarchy', 'seed_design', 'two_stage', 'physics'))
+                      'hierarchy', 'seed_design', 'two_stage', 'physics', 'worlds'))
         hierarchy = (self.hierarchy(top['hierarchy'], 'hierarchy')
                      if top.get('hierarchy') is not None else None)
         hand, structure = self.hand(top['hand'], 'hand', hierarchy)
@@ -205,6 +206,7 @@ class _Reader:
                                 if optimizer.get('restart_stagnation') is not None else None),
             weights=self.weights(top.get('weights', {}), 'weights'),
             physics=self.physics(top.get('physics', {}), 'physics'),
+            worlds=self.worlds(top.get('worlds', {}), 'worlds'),
             torque_penalty=self.torque_penalty(top.get('torque_penalty'), 'torque_penalty'),
             early_termination=self.early_termination(top.get('early_termination'),
                                                      'early_termination'),
@@ -511,6 +513,34 @@ class _Reader:
             contact_breaking_threshold=self.number(
                 section.get('contact_breaking_threshold', default.contact_breaking_threshold),
                 _join(key, 'contact_breaking_threshold'), positive=True))
+
+    def worlds(self, value, key):
+        section = self.mapping(value, key, optional=('aggregate', 'fraction', 'resample',
+                                                     'final_check'))
+        default = WorldsSpec()
+        aggregate = self.choice(section.get('aggregate', default.aggregate),
+                                _join(key, 'aggregate'), WORLD_AGGREGATES)
+        fraction_key = _join(key, 'fraction')
+        if aggregate == 'worst' and 'fraction' not in section:
+            self.fail(fraction_key, 'this key with aggregate: worst (the share of the worst '
+                      'worlds each objective averages, in (0, 1])', got=False)
+        if aggregate == 'mean' and 'fraction' in section:
+            self.fail(fraction_key, 'no fraction with aggregate: mean (it averages every '
+                      'world); set aggregate: worst to average the worst worlds', got=False)
+        fraction = default.fraction
+        if 'fraction' in section:
+            fraction = self.number(section['fraction'], fraction_key)
+            if not 0 < fraction <= 1:
+                self.fail(fraction_key, 'a fraction in (0, 1]', section['fraction'])
+        resample = self.choice(section.get('resample', default.resample),
+                               _join(key, 'resample'), WORLD_RESAMPLING)
+        if resample == 'none' and 'final_check' in section:
+            self.fail(_join(key, 'final_check'), 'no final_check without resample: generation '
+                      '(it chooses among resampled generations)', got=False)
+        return WorldsSpec(aggregate=aggregate, fraction=fraction, resample=resample,
+                          final_check=self.integer(section.get('final_check',
+                                                               default.final_check),
+                                                   _join(key, 'final_check')))
 
     def weights(self, value, key):
         section = self.mapping(value, key, optional=('position', 'orientation'))

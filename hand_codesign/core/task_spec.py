@@ -25,6 +25,9 @@ MORPHOLOGY_PARAMETERS = ('initial_angle', 'finger_position_x', 'finger_position_
                          'segment_length', 'axis_angle', 'joint_limits', 'friction')
 RESTING_TOLERANCE = 1e-4  # m: how far a plane start's z may be from the resting height
 AXES = ('x', 'y', 'z')  # the world axes a position goal may measure
+WORLD_AGGREGATES = ('mean', 'worst')  # worlds.aggregate: eq. (5)'s mean, or CVaR of the worst
+WORLD_RESAMPLING = ('none', 'generation')  # worlds.resample: a fixed set, or a draw per generation
+FINAL_CHECK = 5  # default worlds.final_check: the last generations whose bests are re-evaluated
 
 
 class TaskError(ValueError):
@@ -239,6 +242,34 @@ class WeightsSpec:
 
 
 @dataclass(frozen=True)
+class WorldsSpec:
+    """
+    How a candidate's worlds are scored and drawn (YAML `worlds`, optional; defaults: eq. 5).
+
+    aggregate 'mean' is eq. (5), the mean over the worlds; 'worst' is the conditional value at
+    risk of each objective: the mean over the worst `fraction` of the worlds
+    (core.objectives.combine_worlds). resample 'generation' evaluates each generation on a fresh
+    draw of num_world_states worlds (core.worlds, core.resampling); the run's result is then
+    the best, on the run's fixed worlds, of the best designs of the last `final_check`
+    generations.
+
+    Whatever reads a candidate's objectives reads the aggregated ones: with 'worst' the
+    hierarchy's thresholds judge its checks' worst worlds, and a horizon grows once a share
+    of a generation tracks within the margins in its worst worlds, so later than on average.
+    """
+
+    aggregate: str = 'mean'
+    fraction: float = 1.0  # of the worlds averaged with aggregate 'worst'; 1 with 'mean'
+    resample: str = 'none'
+    final_check: int = FINAL_CHECK
+
+    @property
+    def worst_fraction(self):
+        """Return the share of the worst worlds each objective averages (1.0: every world)."""
+        return self.fraction if self.aggregate == 'worst' else 1.0
+
+
+@dataclass(frozen=True)
 class HierarchySpec:
     """The bottom-up search over hand structures of Fig. 1."""
 
@@ -276,6 +307,7 @@ class Task:
     restart_stagnation: Optional[int] = None
     weights: WeightsSpec = WeightsSpec()
     physics: PhysicsSpec = PhysicsSpec()
+    worlds: WorldsSpec = WorldsSpec()
     torque_penalty: Optional[TorquePenaltySpec] = None
     early_termination: Optional[EarlyTerminationSpec] = None
     hierarchy: Optional[HierarchySpec] = None
@@ -292,6 +324,9 @@ class Task:
     # (core.worlds), disjoint from the training worlds, for a hierarchy structure's check.
     stage: int = 0
     held_out: bool = False
+    # Not in the YAML either, carried in Candidate.world_draw: 0 evaluates on the run's fixed
+    # worlds, k >= 1 on the k-th resampled draw (core.worlds; worlds.resample: generation).
+    world_draw: int = 0
     description: str = ''
     source: str = '<task>'
     source_text: str = ''

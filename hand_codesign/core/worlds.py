@@ -4,6 +4,14 @@ Domain-randomized world states (section III.A): variations of the object's initi
 `world_states(task)` draws a fixed set, uniform in the task's randomization ranges, from a
 numpy Generator seeded with task.seed: every candidate of a run meets the same worlds, and the
 first k worlds of a larger set are the k worlds of a smaller one (one row of draws per world).
+With `worlds: {resample: generation}` each generation's candidates carry a draw number k >= 1
+(Candidate.world_draw, task.world_draw) and meet `world_states` from the stream
+[seed, RESAMPLE_STREAM, k]: a fresh set per generation, the same for every candidate of it.
+Streams of one seed, as numpy SeedSequence entropy: [seed] the fixed (training) worlds,
+[seed, HELD_OUT_STREAM] the hierarchy's held-out worlds, [seed, UNSEEN_STREAM (11)] the unseen
+worlds of core.measures, [seed, RESAMPLE_STREAM, k] the k-th draw. SeedSequence pads entropy
+with zeros, so [seed, s] is [seed, s, 0]: k starts at 1, and RESAMPLE_STREAM is neither 0, 1
+nor 11, so no draw repeats another stream (test_worlds compares the values).
 `grid_world_states(task, 5)` puts every randomized quantity (a range of non-zero width) at 5
 evenly spaced values, all combinations: the robustness grid of Fig. 3 (Task 4 randomizes six
 quantities: 5^6 = 15,625 worlds). `object_state(task, world)` is the object's initial state
@@ -19,6 +27,7 @@ from hand_codesign.core.task import resting_height, Task
 import numpy as np
 
 HELD_OUT_STREAM = 1  # second entropy word of the held-out worlds' generator
+RESAMPLE_STREAM = 21  # second entropy word of the resampled draws' generators (third: k)
 
 QUANTITIES = ('position_x', 'position_y', 'position_z', 'orientation', 'friction', 'scale',
               'mass')
@@ -69,17 +78,26 @@ def world_states(task: Task, count=None) -> List[WorldState]:
     Stage 1 of a two-stage task has the nominal world only. With task.held_out the draws come
     from another stream of the same seed, independent of the training worlds: no held-out
     world repeats a training world (the draws are continuous), so a check on them measures
-    how a design does on worlds it was not optimized on.
+    how a design does on worlds it was not optimized on. With task.world_draw = k >= 1 they
+    are the k-th resampled draw (see the module doc).
     """
     if task.stage == 1:
         return [WorldState.nominal()]
     count = task.num_world_states if count is None else int(count)
-    generator = np.random.default_rng([task.seed, HELD_OUT_STREAM] if task.held_out
-                                      else task.seed)
+    generator = np.random.default_rng(world_stream(task))
     uniform = generator.random((count, len(QUANTITIES)))
     lower = np.array([bounds.lower for bounds in _ranges(task)])
     width = np.array([bounds.width for bounds in _ranges(task)])
     return [WorldState.from_values(row) for row in lower + uniform * width]
+
+
+def world_stream(task: Task):
+    """Return the SeedSequence entropy of the task's worlds: fixed, held out or a draw."""
+    if task.held_out:
+        return [task.seed, HELD_OUT_STREAM]
+    if task.world_draw:
+        return [task.seed, RESAMPLE_STREAM, int(task.world_draw)]
+    return task.seed
 
 
 def randomized_quantities(task: Task):

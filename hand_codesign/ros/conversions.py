@@ -42,7 +42,8 @@ def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, 
         horizon=float(getattr(candidate, 'horizon', 0.0)),
         genome_names=list(genome_names), world_states=int(world_states),
         stage=int(getattr(candidate, 'stage', 0)),
-        held_out_worlds=bool(getattr(candidate, 'held_out', False)))
+        held_out_worlds=bool(getattr(candidate, 'held_out', False)),
+        world_draw=int(getattr(candidate, 'world_draw', 0)))
     if design is not None:
         message.design_names = list(design.names)
         message.design_values = list(design.values)
