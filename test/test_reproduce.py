@@ -82,7 +82,7 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
     assert (worst.worlds.aggregate, worst.worlds.fraction) == ('worst', 0.25)
     assert resampled.worlds.resample == 'generation'
     for task in (worst, resampled):  # nothing else changed
-        assert task.replace(worlds=paper.worlds) == paper
+        assert task.replace(worlds=paper.worlds, source_text=paper.source_text) == paper
     reduced = levers.budget('reduced')
     assert (reduced.iterations, reduced.population, reduced.seeds) == (40, 40, 5)
     assert experiments.training_worlds(by_key['cma'], reduced) == 16

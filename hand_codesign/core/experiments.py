@@ -102,7 +102,7 @@ def _joint_limit_configurations(preset, name, policies):
 
 
 def _lever_configurations(preset):
-    """The paper's algorithms and each lever of the search beyond it, on one pinned preset."""
+    """Return the paper's algorithms and each lever of the search beyond it, on one preset."""
     levers = (('cma', 'cma', ()), ('mocma', 'mocma', ()), ('ipop-cma', 'ipop-cma', ()),
               ('bipop-cma', 'bipop-cma', ()),
               ('cma-worst25', 'cma', (('worlds.aggregate', 'worst'), ('worlds.fraction', 0.25))),
@@ -112,7 +112,7 @@ def _lever_configurations(preset):
 
 
 def _lever_budgets(paper_worlds):
-    """Issue 12's budgets: 40 x 40 on 16 worlds, and Table I's, each over 5 seeds."""
+    """Return issue 12's budgets: 40 x 40 on 16 worlds, and Table I's, each over 5 seeds."""
     return {'smoke': Budget('smoke', 4, 8, 100, 1, world_states=4),
             'reduced': Budget('reduced', 40, 40, 1000, 5, world_states=LEVER_WORLDS),
             'paper': Budget('paper', 100, 80, 1000, 5, world_states=paper_worlds)}
