@@ -1,15 +1,17 @@
 """
-Rollouts per second of a reproduce campaign's runs, and the time another budget would take.
+Physics steps per second of a reproduce campaign's runs, and the time another budget would take.
 
-    python tools/campaign_rates.py results/task5-joint-limits-smoke task5-joint-limits \
+    python tools/campaign_rates.py results/task5-joint-limits-reduced task5-joint-limits \
         --budget paper [--seeds 5] [--cores 2] [--hosts 4 --host-cores 8]
 
-Reads each finished run's bag (its optimizer's wall time and budget: generations x candidates
-x world states), prints per configuration the rollouts per wall second measured here, and
-estimates the campaign at `--budget` from those rates: on this machine, and on H hosts of C
-cores (the rate scaled by the cores, the runs' fixed costs left out: an estimate, not a
-measurement). A smoke campaign's small batches spend a larger share of their time on
-start-up and dispatch than long runs do, so its rates make the estimates pessimistic.
+Reads each finished run's bag (its optimizer's wall time and the steps its evaluations
+simulated), prints per configuration the physics steps per wall second measured here, and
+estimates the campaign at `--budget` from those rates and the steps that budget allows
+(core.preview.run_budget, full rollouts: pessimistic where early termination cuts them): on
+this machine, and on H hosts of C cores (the rate scaled by the cores, the runs' fixed costs
+left out: an estimate, not a measurement). A smoke campaign's small batches spend a larger
+share of their time on start-up and dispatch than long runs do, so its rates make the
+estimates pessimistic.
 """
 
 import argparse
@@ -19,35 +21,40 @@ from hand_codesign.analysis import campaign, records
 from hand_codesign.core.experiments import EXPERIMENTS, run_key, training_worlds
 from hand_codesign.core.preview import run_budget
 from hand_codesign.core.runs import load_run_task
+import numpy as np
 
 
-def measured_rate(runs_dir, configuration):
-    """Return (rollouts, wall seconds) of the configuration's finished runs."""
-    rollouts = seconds = 0.0
+def measured_rate(runs_dir, configuration, time_step):
+    """
+    Return (physics steps, wall seconds) of the configuration's finished runs.
+
+    Steps are the simulated time of each candidate's accepted evaluation (once per candidate,
+    as `simulated_time` counts the steps actually simulated) over the time step, so a stage
+    on the nominal world or a rollout cut short counts for what it cost.
+    """
+    steps = seconds = 0.0
     for path in sorted(pathlib.Path(runs_dir).glob(f'{configuration.key}-seed*')):
         if path.name.count('.resume'):
             continue
         key = path.name
-        bags = campaign.attempts(runs_dir, key)
         if campaign.finished_bag(runs_dir, key) is None:
             continue
-        for bag in bags:
+        for bag in campaign.attempts(runs_dir, key):
             record = records.open_run(bag, warn=False)
             summary = records.last_summary(record)
             if summary is None:
                 continue
-            info = record.run_info
-            rollouts += float(summary['evaluations']) * info.world_states
+            _, first = np.unique(record.evaluations['candidate_id'], return_index=True)
+            steps += float(np.sum(record.evaluations['simulated_time'][first])) / time_step
             seconds += float(summary['wall_time'])
-    return rollouts, seconds
+    return steps, seconds
 
 
-def budget_rollouts(folder, configuration, budget):
-    """Return the rollouts one run of the configuration may spend at `budget` (core.preview)."""
-    task = load_run_task(pathlib.Path(folder) / 'tasks' / f'{configuration.key}.yaml', 1,
+def budget_task(folder, configuration, budget):
+    """Return the task of one run of the configuration at `budget`."""
+    return load_run_task(pathlib.Path(folder) / 'tasks' / f'{configuration.key}.yaml', 1,
                          budget.iterations, budget.population,
                          training_worlds(configuration, budget))
-    return run_budget(task)['rollouts']
 
 
 def main():
@@ -65,14 +72,15 @@ def main():
     seeds = arguments.seeds or budget.seeds
     runs_dir = pathlib.Path(arguments.folder) / 'runs'
     total = 0.0
-    print(f'{"configuration":24} {"rollouts/s here":>16} {"hours at " + budget.name:>16}')
+    print(f'{"configuration":24} {"steps/s here":>16} {"hours at " + budget.name:>16}')
     for configuration in experiment.configurations:
-        rollouts, seconds = measured_rate(runs_dir, configuration)
+        task = budget_task(arguments.folder, configuration, budget)
+        steps, seconds = measured_rate(runs_dir, configuration, task.time_step)
         if not seconds:
             print(f'{configuration.key:24} {"no finished run":>16}')
             continue
-        rate = rollouts / seconds
-        needed = budget_rollouts(arguments.folder, configuration, budget) * seeds / rate
+        rate = steps / seconds
+        needed = run_budget(task)['physics_steps'] * seeds / rate
         total += needed
         print(f'{configuration.key:24} {rate:16.0f} {needed / 3600:16.2f}')
     hosts = total * arguments.cores / (arguments.hosts * arguments.host_cores)
