@@ -283,13 +283,15 @@ class Campaign:
         command = [sys.executable, '-m', 'hand_codesign.cli', 'run'] + run_arguments
         print('reproduce: hand-codesign run ' + shlex.join(run_arguments), flush=True)
         # its own process group: a Ctrl-C reaches it once, forwarded below, so that the
-        # run is not interrupted again while it closes its bag
+        # run is not interrupted again while it closes its bag. Forwarded as SIGTERM, which
+        # `run` treats as Ctrl-C: a campaign started in the background (`nohup ... &`) and
+        # its children ignore SIGINT, and a run killed after STOP_WAIT leaves its nodes behind
         child = subprocess.Popen(command, process_group=0)
         try:
             return child.wait()
         except KeyboardInterrupt:
             if child.poll() is None:
-                child.send_signal(signal.SIGINT)
+                child.send_signal(signal.SIGTERM)
             try:
                 child.wait(timeout=STOP_WAIT)
             except subprocess.TimeoutExpired:
