@@ -26,13 +26,11 @@ A world the design starts in collision with is not simulated: its final error is
 one and it never counts as touching.
 """
 
-import concurrent.futures
 import dataclasses
 import math
-import multiprocessing
 
 from hand_codesign.core.evaluate import _TaskContext, evaluate_design
-from hand_codesign.core.robustness import start_and_goal_poses
+from hand_codesign.core.robustness import map_chunks, start_and_goal_poses
 from hand_codesign.core.worlds import WorldState
 import numpy as np
 
@@ -109,15 +107,7 @@ def measure_worlds(x, task, worlds, processes=1):
     worlds = tuple(worlds)
     if not worlds:
         raise ValueError('measure_worlds needs at least one world')
-    x = np.array(x, dtype=float)
-    jobs = [(x, task, worlds[start:start + CHUNK]) for start in range(0, len(worlds), CHUNK)]
-    if processes <= 1 or len(jobs) == 1:
-        parts = [_measure_chunk(job) for job in jobs]
-    else:
-        spawn = multiprocessing.get_context('spawn')
-        with concurrent.futures.ProcessPoolExecutor(min(processes, len(jobs)),
-                                                    mp_context=spawn) as pool:
-            parts = list(pool.map(_measure_chunk, jobs))
+    parts = map_chunks(_measure_chunk, x, task, worlds, CHUNK, processes)
     initial, final, final_poses, collisions, contacts = (np.concatenate(column)
                                                          for column in zip(*parts))
     starts, goals = start_and_goal_poses(task, worlds)

@@ -114,22 +114,31 @@ def evaluate_robustness(x, task, worlds: Optional[Sequence] = None, values_per_q
     if chunk_size < 1 or processes < 1:
         raise ValueError(f'chunk_size and processes must be >= 1, got {chunk_size}, '
                          f'{processes}')
-    x = np.array(x, dtype=float)
-    jobs = [(x, task, worlds[start:start + chunk_size])
-            for start in range(0, len(worlds), chunk_size)]
-    if processes == 1 or len(jobs) == 1:
-        parts = [_evaluate_chunk(job) for job in jobs]
-    else:
-        # A process pool executor fails (BrokenProcessPool) where a multiprocessing.Pool would
-        # wait forever for workers that cannot start.
-        spawn = multiprocessing.get_context('spawn')
-        with concurrent.futures.ProcessPoolExecutor(min(processes, len(jobs)),
-                                                    mp_context=spawn) as pool:
-            parts = list(pool.map(_evaluate_chunk, jobs))
+    parts = map_chunks(_evaluate_chunk, x, task, worlds, chunk_size, processes)
     initial, final, collisions, final_poses = (np.concatenate(column)
                                                for column in zip(*parts))
     starts, goals = start_and_goal_poses(task, worlds)
     return RobustnessReport(worlds, initial, final, collisions, starts, goals, final_poses)
+
+
+def map_chunks(function, x, task, worlds, chunk_size, processes):
+    """
+    Return [function((x, task, chunk)) for each chunk of `worlds`], in world order.
+
+    With processes > 1 the chunks run in a pool of spawned processes (each builds its own
+    PyBullet client); the results are the same as in one process.
+    """
+    x = np.array(x, dtype=float)
+    jobs = [(x, task, worlds[start:start + chunk_size])
+            for start in range(0, len(worlds), chunk_size)]
+    if processes <= 1 or len(jobs) == 1:
+        return [function(job) for job in jobs]
+    # A process pool executor fails (BrokenProcessPool) where a multiprocessing.Pool would
+    # wait forever for workers that cannot start.
+    spawn = multiprocessing.get_context('spawn')
+    with concurrent.futures.ProcessPoolExecutor(min(processes, len(jobs)),
+                                                mp_context=spawn) as pool:
+        return list(pool.map(function, jobs))
 
 
 def start_and_goal_poses(task, worlds):
@@ -157,4 +166,5 @@ def _evaluate_chunk(job):
     return tuple(np.concatenate(column) for column in zip(*parts))
 
 
-__all__ = ['evaluate_robustness', 'RobustnessReport', 'start_and_goal_poses', 'world_values']
+__all__ = ['evaluate_robustness', 'map_chunks', 'RobustnessReport', 'start_and_goal_poses',
+           'world_values']

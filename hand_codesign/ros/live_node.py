@@ -22,11 +22,9 @@ from hand_codesign.ros import topics
 from hand_codesign.ros.mcap_writer import message_definition
 from hand_codesign.ros.mcap_writer import MESSAGE_ENCODING
 from hand_codesign.ros.mcap_writer import SCHEMA_ENCODING
+from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign.ros.recording import recorder_qos
-import rclpy
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 PARAMETERS = {
@@ -93,21 +91,7 @@ class LiveView(Node):
 
 
 def main(args=None):
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = LiveView()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (UserError, ParameterException) as error:
-        rclpy.logging.get_logger('live_view').error(str(error))
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(LiveView, 'live_view', args)
 
 
 if __name__ == '__main__':

@@ -22,12 +22,10 @@ from hand_codesign.ros.conversions import markers_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.conversions import summary_message
 from hand_codesign.ros.keys import OptimizerSigner
+from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign.ros.topics import deliver
 from hand_codesign_msgs.msg import RunInfo
-import rclpy
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.task import Future
 
@@ -129,21 +127,8 @@ class OptimizerNode(Node):
 
 
 def main(args=None, load_resume=None):
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = OptimizerNode(load_resume)
-        rclpy.spin_until_future_complete(node, node.finished)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (TaskError, DispatchError, UserError, ParameterException) as error:
-        rclpy.logging.get_logger('optimizer').error(str(error))
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(lambda: OptimizerNode(load_resume), 'optimizer', args,
+                    errors=(TaskError, DispatchError), until=lambda node: node.finished)
 
 
 if __name__ == '__main__':

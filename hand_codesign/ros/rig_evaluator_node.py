@@ -16,7 +16,6 @@ import time
 
 from hand_codesign.core import contract
 from hand_codesign.core.rig import RigEvaluator
-from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import evaluation_message
 from hand_codesign.ros.conversions import rejection_message
@@ -24,11 +23,9 @@ from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.conversions import trial_request
 from hand_codesign.ros.keys import evaluator_credential
 from hand_codesign.ros.keys import sign_evaluation
+from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import EvaluatorStatus
-import rclpy
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 
 # name: (default, description, (lowest, highest) or None)
@@ -124,21 +121,7 @@ class RigEvaluatorNode(Node):
 
 
 def main(args=None):
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = RigEvaluatorNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ParameterException, UserError) as error:
-        rclpy.logging.get_logger('rig_evaluator').error(str(error))
-        return 2
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(RigEvaluatorNode, 'rig_evaluator', args)
 
 
 if __name__ == '__main__':

@@ -16,11 +16,9 @@ from geometry_msgs.msg import PoseStamped
 from hand_codesign.core import contract
 from hand_codesign.core.sim_rig import requested_trial, SampleClock, SimulatedRig
 from hand_codesign.ros import topics
+from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import TrialStatus
-import rclpy
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.time import Time
 
@@ -126,24 +124,13 @@ class SimRigNode(Node):
             rig_id=self.settings['rig_id'], trial_id=request.trial_id,
             evaluator_id=request.evaluator_id, event=event, stamp=stamp, reason=reason))
 
+    def destroy_node(self):
+        self.rig.close()
+        super().destroy_node()
+
 
 def main(args=None):
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = SimRigNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ParameterException as error:
-        rclpy.logging.get_logger('sim_rig').error(str(error))
-        return 2
-    finally:
-        if node is not None:
-            node.rig.close()
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(SimRigNode, 'sim_rig', args)
 
 
 if __name__ == '__main__':

@@ -1,0 +1,38 @@
+"""
+The `main` every node of a run shares: start rclpy, build the node, spin it, shut down.
+
+A user's mistake (a bad parameter, a task the node cannot run) is one error line and exit
+status 2, never a traceback; Ctrl-C and an external shutdown end the node normally (0).
+"""
+
+from hand_codesign.errors import UserError
+import rclpy
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException
+
+
+def run_node(make_node, logger_name, args=None, errors=(), until=None):
+    """
+    Spin the node `make_node()` builds until shutdown; return the process's exit status.
+
+    errors: more exception types that mean a user's mistake. until: a function of the node
+    returning the Future whose completion ends the spin (None: spin until shutdown).
+    """
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = make_node()
+        if until is None:
+            rclpy.spin(node)
+        else:
+            rclpy.spin_until_future_complete(node, until(node))
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except (ParameterException, UserError, *errors) as error:
+        rclpy.logging.get_logger(logger_name).error(str(error))
+        return 2
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
