@@ -17,6 +17,7 @@ import textwrap
 import time
 
 from hand_codesign import cli
+from hand_codesign.commands import reproduce
 from hand_codesign.analysis import campaign, records
 from hand_codesign.core import experiments
 from hand_codesign.core.evaluate import evaluate
@@ -203,6 +204,17 @@ def wait_for_a_generation(bag, process, timeout=180.0):
                 pass
         time.sleep(0.2)
     raise AssertionError(f'no generation in {bag} in time')
+
+
+def test_time_left_is_fitted_to_runs_simulated_whole_in_this_session():
+    # a continued campaign first measures or resumes the runs it left: seconds for a whole
+    # run's budget, which made the 17 runs left of a campaign look like 41 s
+    progress = reproduce.Progress(total=3)
+    progress.pending = [1000, 1000, 1000]
+    progress.done(1000, 2.0, whole=False)
+    assert progress.seconds_left() is None
+    progress.done(1000, 300.0)
+    assert progress.seconds_left() == pytest.approx(300.0)
 
 
 def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(tmp_path):

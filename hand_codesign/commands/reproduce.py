@@ -128,9 +128,15 @@ class Progress:
             per_step, fixed = float(np.sum(seconds) / max(np.sum(steps), 1.0)), 0.0
         return sum(fixed + per_step * cost for cost in self.pending)
 
-    def done(self, steps, seconds):
-        """Count a run finished in this session."""
-        self.done_runs.append((steps, seconds))
+    def done(self, steps, seconds, whole=True):
+        """
+        Count a run finished in this session.
+
+        Only a run simulated here from its start (`whole`) tells the cost of a run: one that
+        was only measured, or resumed near its end, would make the rest look nearly free.
+        """
+        if whole:
+            self.done_runs.append((steps, seconds))
         self.pending.remove(steps)
 
 
@@ -247,7 +253,8 @@ class Campaign:
             if bag is None:
                 bag = self.run_one(configuration, seed, evaluators)
             self.measure(configuration, seed, bag, max(1, evaluators))
-            progress.done(self.cost(configuration), time.monotonic() - started)
+            progress.done(self.cost(configuration), time.monotonic() - started,
+                          whole=state == 'starting')
 
     def run_one(self, configuration, seed, evaluators):
         """Run (or resume) one run to its end; return its finished bag."""
