@@ -17,8 +17,8 @@ import textwrap
 import time
 
 from hand_codesign import cli
-from hand_codesign.commands import reproduce
 from hand_codesign.analysis import campaign, records
+from hand_codesign.commands import reproduce
 from hand_codesign.core import experiments
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.genome import genome_spec
