@@ -79,10 +79,14 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
                                                            preset.read_text()))
     resampled = parse_task(experiments.configuration_task_text(by_key['cma-resample'],
                                                                preset.read_text()))
+    both = parse_task(experiments.configuration_task_text(by_key['cma-worst25-resample'],
+                                                          preset.read_text()))
     paper = parse_task(preset.read_text())
     assert (worst.worlds.aggregate, worst.worlds.fraction) == ('worst', 0.25)
     assert resampled.worlds.resample == 'generation'
-    for task in (worst, resampled):  # nothing else changed
+    assert (both.worlds.aggregate, both.worlds.fraction, both.worlds.resample) == (
+        'worst', 0.25, 'generation')
+    for task in (worst, resampled, both):  # nothing else changed
         assert task.replace(worlds=paper.worlds, source_text=paper.source_text) == paper
     reduced = levers.budget('reduced')
     assert (reduced.iterations, reduced.population, reduced.seeds) == (40, 40, 5)

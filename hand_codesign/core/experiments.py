@@ -106,7 +106,10 @@ def _lever_configurations(preset):
     levers = (('cma', 'cma', ()), ('mocma', 'mocma', ()), ('ipop-cma', 'ipop-cma', ()),
               ('bipop-cma', 'bipop-cma', ()),
               ('cma-worst25', 'cma', (('worlds.aggregate', 'worst'), ('worlds.fraction', 0.25))),
-              ('cma-resample', 'cma', (('worlds.resample', 'generation'),)))
+              ('cma-resample', 'cma', (('worlds.resample', 'generation'),)),
+              ('cma-worst25-resample', 'cma', (('worlds.aggregate', 'worst'),
+                                               ('worlds.fraction', 0.25),
+                                               ('worlds.resample', 'generation'))))
     return tuple(Configuration(key, preset, algorithm, LEVER_WORLDS, 'torque', options)
                  for key, algorithm, options in levers)
 
