@@ -219,6 +219,11 @@ def test_time_left_is_fitted_to_runs_simulated_whole_in_this_session():
     assert progress.seconds_left() is None
     progress.done(1000, 300.0)
     assert progress.seconds_left() == pytest.approx(300.0)
+    # runs of nearly the same cost (a final check adds a little) and noisy times: no line
+    # through two close points, whose slope would swing to hours or to nothing
+    progress.pending += [1001, 1002]
+    progress.done(1001, 320.0)
+    assert progress.seconds_left() == pytest.approx((300.0 + 320.0) / 2001 * (1000 + 1002))
 
 
 def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(tmp_path):

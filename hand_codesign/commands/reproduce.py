@@ -90,6 +90,10 @@ def check_arguments(arguments):
         raise UserError(f'--evaluators: expected 1 or more, got {arguments.evaluators}')
 
 
+FIT_SPREAD = 2.0
+"""Runs of costs this far apart fit a fixed part; closer costs would make the fit swing wildly."""
+
+
 class Progress:
     """
     Run k of n of the whole campaign and the time left, from this session's runs.
@@ -121,7 +125,7 @@ class Progress:
         if not self.done_runs:
             return None
         steps, seconds = (np.array(column, dtype=float) for column in zip(*self.done_runs))
-        if len(set(steps.tolist())) >= 2:
+        if steps.max() >= FIT_SPREAD * steps.min():
             per_step, fixed = np.polyfit(steps, seconds, 1)
             per_step, fixed = max(per_step, 0.0), max(fixed, 0.0)
         else:
