@@ -269,6 +269,7 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
         summary = summarize(measure_worlds(x, task, unseen_world_states(task, 12)), tolerance)
         row = table[key]
         assert float(row['within']) == summary.within
+        assert float(row['within_by_seed']) == summary.within  # one seed: its own share
         assert float(row['median']) == summary.median
         assert float(row['p90']) == summary.p90
         assert int(row['joint_limits_found']) == int(summary.joint_limits_found)

@@ -163,7 +163,9 @@ def pooled_row(measured, tolerance):
     Return a configuration's row over seeds from its runs' measures records.
 
     The seeds' unseen worlds are pooled: share within, median and p90 of the error; joint
-    limits found is the share of seeds whose design found them.
+    limits found is the share of seeds whose design found them. The share within is also
+    given per seed (in seed order): whether a lever works in nearly every seed, or in a few
+    very well, is what a pooled share hides.
     """
     kind = tolerance.kind
     errors = np.concatenate([record['worlds']['errors'][kind] for record in measured])
@@ -172,6 +174,9 @@ def pooled_row(measured, tolerance):
     found = sum(summary.joint_limits_found for summary in summaries)
     return {'seeds': len(measured), 'worlds': int(len(errors)),
             'within': float(np.mean(errors < tolerance.limit)),
+            'within_by_seed': tuple(
+                float(np.mean(np.asarray(record['worlds']['errors'][kind]) < tolerance.limit))
+                for record in measured),
             'median': float(np.median(errors)), 'p90': float(np.percentile(errors, 90)),
             'initial_median': float(np.median(initial)),
             'joint_limits_found': found,
@@ -182,7 +187,8 @@ def pooled_row(measured, tolerance):
 
 TABLE_COLUMNS = ('experiment', 'configuration', 'preset', 'policy', 'algorithm',
                  'world_states', 'budget', 'iterations', 'population', 'seeds',
-                 'unseen_worlds', 'tolerance', 'unit', 'within', 'median', 'p90',
+                 'unseen_worlds', 'tolerance', 'unit', 'within', 'within_by_seed', 'median',
+                 'p90',
                  'initial_median', 'joint_limits_found', 'joint_limits_found_share',
                  'limit_contact_share', 'collision_share')
 
@@ -201,6 +207,8 @@ def write_table(out, name, rows):
 def _cell(value):
     if isinstance(value, float):
         return repr(value)
+    if isinstance(value, tuple):
+        return ' '.join(_cell(item) for item in value)
     text = str(value)
     return '"' + text.replace('"', '""') + '"' if any(c in text for c in ',"\n') else text
 
@@ -220,13 +228,14 @@ def error_text(value, tolerance):
 def markdown_table(rows, tolerance, first='configuration'):
     """Return the Markdown table of rows: a line per configuration (or structure)."""
     lines = [f'| {first} | policy | algorithm | training worlds | seeds | unseen worlds | '
-             f'within ({tolerance.describe()}) | median | p90 | median at the start | '
-             'joint limits found |',
-             '|---|---|---|---|---|---|---|---|---|---|---|']
+             f'within ({tolerance.describe()}) | each seed (%) | median | p90 | '
+             'median at the start | joint limits found |',
+             '|---|---|---|---|---|---|---|---|---|---|---|---|']
     for row in rows:
         lines.append(
             f'| {row[first]} | {row["policy"]} | {row["algorithm"]} | {row["world_states"]} '
             f'| {row["seeds"]} | {row["unseen_worlds"]} | {percent(row["within"])} | '
+            f'{" ".join(f"{100 * share:.0f}" for share in row["within_by_seed"])} | '
             f'{error_text(row["median"], tolerance)} | {error_text(row["p90"], tolerance)} | '
             f'{error_text(row["initial_median"], tolerance)} | '
             f'{percent(row["joint_limits_found_share"])} ({row["joint_limits_found"]} of '
