@@ -182,9 +182,9 @@ from hand_codesign.core.task_spec import (ALGORITHMS, ArchiveSpec, AXES, Bounds,
                                           WORLD_AGGREGATES, WORLD_RESAMPLING, WorldsSpec)
 
 __all__ = [
-    'ALGORITHMS', 'ArchiveSpec', 'AXES', 'axis_angle_quaternion', 'Bounds', 'DISTANCES', 'EarlyTerminationSpec',
-    'GoalSpec', 'HandSpec', 'HierarchySpec', 'HorizonSpec', 'load_task', 'MORPHOLOGY_PARAMETERS',
-    'MorphologySpec', 'ObjectSpec', 'OrientationGoal', 'PARAMETER_MODES', 'ParameterSpec',
+    'ALGORITHMS', 'ArchiveSpec', 'AXES', 'axis_angle_quaternion', 'Bounds', 'DISTANCES',
+    'EarlyTerminationSpec', 'GoalSpec', 'HandSpec', 'HierarchySpec', 'HorizonSpec', 'load_task',
+    'MORPHOLOGY_PARAMETERS', 'MorphologySpec', 'ObjectSpec', 'OrientationGoal', 'PARAMETER_MODES', 'ParameterSpec',
     'parse_design', 'parse_task', 'PhysicsSpec', 'POLICY_KINDS', 'PolicySpec', 'PositionGoal',
     'RandomizationSpec', 'resting_height', 'RESTING_TOLERANCE', 'SHAPES', 'STARTS', 'SymmetrySpec',
     'Task', 'TaskError', 'TORQUE_MODES', 'TorquePenaltySpec', 'WeightsSpec', 'WORLD_AGGREGATES',
