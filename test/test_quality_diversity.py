@@ -192,6 +192,16 @@ def test_tasks_select_cma_mae_and_cma_me_with_their_archive(tmp_path):
         genome_spec(task).size, 0.5))
 
 
+def test_check_shows_the_archive_a_run_would_fill(tmp_path, capsys):
+    path = write_task(tmp_path, task_document('cma-mae'))
+    assert main(['check', str(path)]) == 0
+    text = ' '.join(capsys.readouterr().out.split())
+    assert ('archive: 10 x 10 cells over finger_length [0.16, 0.36] m x joint_range [0, 3.142] '
+            'rad; 8 CMA-ES emitters of 10 candidates, learning rate 0.01') in text
+    assert main(['check', str(TASK5), '--json']) == 0
+    assert json.loads(capsys.readouterr().out)['budget']['archive'] is None
+
+
 BAD_ARCHIVES = [
     ('cma-mae', {'cells': [0, 10]}, 'optimizer.archive.cells[0]: expected a positive integer, '
                                     'got 0'),

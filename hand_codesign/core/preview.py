@@ -38,6 +38,7 @@ optimizer that refuses the budget) raise TaskError, HierarchyError or OptimizerE
 """
 
 from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.task_spec import QD_ALGORITHMS
 from hand_codesign.core.hierarchy import bottom_up_path
 from hand_codesign.core.hierarchy import grown_choices
 from hand_codesign.core.hierarchy import GROWN_FROM
@@ -200,7 +201,21 @@ def budget(task, structures, grown=()):
         'structures': [{key: value for key, value in entry.items() if key != 'genome'}
                        for entry in list(structures) + list(grown)],
         'may_end_early': may_end_early(task),
+        'archive': archive_preview(task),
     }
+
+
+def archive_preview(task):
+    """Return the archive of a quality-diversity task (cma-mae, cma-me), else None."""
+    if task.algorithm not in QD_ALGORITHMS:
+        return None
+    # imported here: a run of another algorithm needs none of it
+    from hand_codesign.core.optimizers import make_optimizer
+    optimizer = make_optimizer(task, genome_spec(task).size)
+    return {'descriptors': list(optimizer.describe.names),
+            'units': list(optimizer.describe.units),
+            'cells': list(optimizer.cells), 'ranges': [list(r) for r in optimizer.ranges],
+            'emitters': list(optimizer.batch_sizes), 'learning_rate': optimizer.learning_rate}
 
 
 def may_end_early(task):
