@@ -192,6 +192,24 @@ def test_tasks_select_cma_mae_and_cma_me_with_their_archive(tmp_path):
         genome_spec(task).size, 0.5))
 
 
+def test_joints_without_limits_span_the_archive_by_their_initial_angles(tmp_path, capsys):
+    task = load_task(ROOT / 'config' / 'tasks' / 'task4.yaml').replace(algorithm='cma-mae')
+    optimizer = make_optimizer(task, genome_spec(task).size)
+    assert optimizer.describe.names == ('finger_length', 'initial_angle')
+    assert optimizer.ranges == ((pytest.approx(0.03), pytest.approx(0.10)),
+                                (pytest.approx(-math.pi / 2), pytest.approx(math.pi / 2)))
+    document = yaml.safe_load((ROOT / 'config' / 'tasks' / 'task4.yaml').read_text())
+    document['optimizer'].update(algorithm='cma-me', archive={
+        'descriptors': ['finger_length', 'joint_range']})
+    path = write_task(tmp_path, document, 'limitless.yaml')
+    assert main(['check', str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == (
+        f'hand-codesign check: error: {path}: optimizer.archive.descriptors: expected '
+        "descriptors the task has, got 'joint_range', which needs joint limits (finger0.joint0 "
+        'has none: see morphology.joint_limits)')
+
+
 def test_check_shows_the_archive_a_run_would_fill(tmp_path, capsys):
     path = write_task(tmp_path, task_document('cma-mae'))
     assert main(['check', str(path)]) == 0

@@ -15,7 +15,9 @@ decodes to, which is the archive's default extent along that axis.
     friction               the hand's friction coefficient
 
 A descriptor whose value a task fixes (its genes have equal bounds) cannot spread an archive:
-`descriptor_ranges` names it in a TaskError.
+`descriptor_ranges` names it in a TaskError. Without `optimizer.archive.descriptors` an archive
+spans finger_length and joint_range, or finger_length and initial_angle for a task whose
+joints have no limits (Tasks 1 to 4).
 """
 
 import dataclasses
@@ -89,7 +91,8 @@ def _joint_range_bounds(values):
     lowest, highest = [], []
     for prefix, joint in values.joints():
         if joint.lower_limit is None:
-            raise TaskError('joint_range needs joint limits (morphology.joint_limits is none)')
+            raise TaskError(f'needs joint limits ({prefix} has none: see '
+                            'morphology.joint_limits)')
         # the two limit genes are sorted when decoded: the span is |upper gene - lower gene|
         a_low, a_high = values.of(f'{prefix}.lower_limit', joint.lower_limit)
         b_low, b_high = values.of(f'{prefix}.upper_limit', joint.upper_limit)
@@ -131,6 +134,13 @@ DESCRIPTORS = {descriptor.name: descriptor for descriptor in (
 # DESCRIPTOR_NAMES (task_spec, which the task reader checks names against) lists these keys
 
 
+def default_descriptors(task):
+    """Return finger_length and joint_range, or initial_angle when the joints have no limits."""
+    if task.morphology.joint_limits.mode == 'none':
+        return ('finger_length', 'initial_angle')
+    return ('finger_length', 'joint_range')
+
+
 def descriptor_ranges(task, names, key='optimizer.archive.descriptors'):
     """
     Return [(lower, upper)] of each named descriptor on the task's genome bounds.
@@ -147,7 +157,8 @@ def descriptor_ranges(task, names, key='optimizer.archive.descriptors'):
         try:
             lower, upper = DESCRIPTORS[name].bounds(values)
         except TaskError as error:
-            raise TaskError(f'{task.source}: {key}: {name}: {error}') from None
+            raise TaskError(f'{task.source}: {key}: expected descriptors the task has, got '
+                            f'{name!r}, which {error}') from None
         if not upper > lower:
             raise TaskError(
                 f'{task.source}: {key}: expected descriptors that vary on structure '
@@ -160,8 +171,8 @@ def descriptor_ranges(task, names, key='optimizer.archive.descriptors'):
 class DesignDescriptors:
     """The named descriptors of a task's genomes: call it with a normalized genome."""
 
-    def __init__(self, task, names):
-        self.names = tuple(names)
+    def __init__(self, task, names=None):
+        self.names = tuple(names or default_descriptors(task))
         self.spec = genome_spec(task)
         self.ranges = descriptor_ranges(task, self.names)
         self.units = tuple(DESCRIPTORS[name].unit for name in self.names)
@@ -173,4 +184,4 @@ class DesignDescriptors:
 
 
 __all__ = ['DESCRIPTOR_NAMES', 'DESCRIPTORS', 'Descriptor', 'DesignDescriptors',
-           'descriptor_ranges']
+           'default_descriptors', 'descriptor_ranges']

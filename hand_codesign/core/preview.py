@@ -38,7 +38,6 @@ optimizer that refuses the budget) raise TaskError, HierarchyError or OptimizerE
 """
 
 from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.task_spec import QD_ALGORITHMS
 from hand_codesign.core.hierarchy import bottom_up_path
 from hand_codesign.core.hierarchy import grown_choices
 from hand_codesign.core.hierarchy import GROWN_FROM
@@ -48,6 +47,7 @@ from hand_codesign.core.objectives import goal_schedule
 from hand_codesign.core.optimizers import make_optimizer
 from hand_codesign.core.robustness import world_values
 from hand_codesign.core.sim import EventPlan
+from hand_codesign.core.task_spec import QD_ALGORITHMS
 from hand_codesign.core.worlds import object_state, QUANTITIES, world_states
 
 KINDS = ('position', 'orientation')
@@ -209,8 +209,6 @@ def archive_preview(task):
     """Return the archive of a quality-diversity task (cma-mae, cma-me), else None."""
     if task.algorithm not in QD_ALGORITHMS:
         return None
-    # imported here: a run of another algorithm needs none of it
-    from hand_codesign.core.optimizers import make_optimizer
     optimizer = make_optimizer(task, genome_spec(task).size)
     return {'descriptors': list(optimizer.describe.names),
             'units': list(optimizer.describe.units),

@@ -95,7 +95,8 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
       restart_stagnation: 20         # optional, ipop-cma / bipop-cma only: generations
                                      # without improvement that end a CMA-ES instance
       archive:                       # optional, cma-mae / cma-me only (these defaults):
-        descriptors: [finger_length, joint_range]  # two of core.descriptors' descriptors
+        descriptors: [finger_length, joint_range]  # two of core.descriptors' descriptors;
+                                     # default these, or initial_angle for joints without limits
         cells: [10, 10]              # of the grid, along each descriptor
         ranges: [[0.16, 0.36], [0, pi]]            # optional; default: the least and
                                      # greatest value on the task's genome bounds

@@ -77,8 +77,8 @@ def _check_archive(task, fail):
              f'emitters (each samples at least 2 of the {task.population} candidates), got '
              f'{archive.emitters}')
     # imported here: the descriptors decode genomes, and the genome module imports this one
-    from hand_codesign.core.descriptors import descriptor_ranges
-    descriptor_ranges(task, archive.descriptors)
+    from hand_codesign.core.descriptors import default_descriptors, descriptor_ranges
+    descriptor_ranges(task, archive.descriptors or default_descriptors(task))
 
 
 def _check_worlds(task, fail):

@@ -555,10 +555,12 @@ class _Reader:
                                     or len(section[name]) != 2):
                 self.fail(_join(key, name), 'a list of two entries, one per descriptor',
                           section[name])
-        descriptors = tuple(self.choice(item, f'{key}.descriptors[{index}]',
-                                        DESCRIPTOR_NAMES) for index, item in
-                            enumerate(section.get('descriptors', default.descriptors)))
-        if descriptors[0] == descriptors[1]:
+        descriptors = None
+        if 'descriptors' in section:
+            descriptors = tuple(self.choice(item, f'{key}.descriptors[{index}]',
+                                            DESCRIPTOR_NAMES)
+                                for index, item in enumerate(section['descriptors']))
+        if descriptors is not None and descriptors[0] == descriptors[1]:
             self.fail(_join(key, 'descriptors'), 'two different descriptors',
                       list(descriptors))
         cells = tuple(self.integer(item, f'{key}.cells[{index}]') for index, item in

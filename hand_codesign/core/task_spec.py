@@ -278,13 +278,14 @@ class ArchiveSpec:
     """
     The archive of a quality-diversity search (YAML `optimizer.archive`, optional).
 
-    Two descriptors of the design (core.descriptors) span a grid of `cells`; `ranges` (None:
-    the least and greatest value each descriptor takes on the task's genome bounds) its
-    extent. `emitters` (None: one per 10 candidates) share the population; `learning_rate`
-    (None: 0.01) is CMA-MAE's alpha.
+    Two descriptors of the design (core.descriptors; None: finger_length and joint_range, or
+    initial_angle for joints without limits) span a grid of `cells`; `ranges` (None: the least
+    and greatest value each descriptor takes on the task's genome bounds) its extent.
+    `emitters` (None: one per 10 candidates) share the population; `learning_rate` (None:
+    0.01) is CMA-MAE's alpha.
     """
 
-    descriptors: Tuple[str, ...] = ('finger_length', 'joint_range')
+    descriptors: Optional[Tuple[str, ...]] = None
     cells: Tuple[int, ...] = (10, 10)
     ranges: Optional[Tuple[Tuple[float, float], ...]] = None
     emitters: Optional[int] = None
