@@ -82,6 +82,16 @@ def header(summary):
                       f'{budget["population"]} candidates, {budget["world_states"]} world '
                       f'states, seed {summary["seed"]}; the search starts at the {start} with '
                       f'step size {budget["initial_sigma"]:g} (normalized genome)'))
+    archive = budget['archive']
+    if archive:
+        axes = ' x '.join(
+            f'{name} [{low:.4g}, {high:.4g}]{" " + unit if unit else ""}' for name, unit, (
+                low, high) in zip(archive['descriptors'], archive['units'], archive['ranges']))
+        sizes = sorted(set(archive['emitters']))
+        lines.append(wrap(f'archive: {archive["cells"][0]} x {archive["cells"][1]} cells over '
+                          f'{axes}; {len(archive["emitters"])} CMA-ES emitters of '
+                          f'{" or ".join(map(str, sizes))} candidates, learning rate '
+                          f'{archive["learning_rate"]:g}'))
     if summary['hierarchy']:
         check = budget['structures'][0]['check_world_states']
         grown = summary['hierarchy_grown']

@@ -1,4 +1,4 @@
-"""CMA-ES (also with restarts) and MO-CMA-ES: optima, determinism, save/restore, replay."""
+"""CMA-ES with restarts, MO-CMA-ES, CMA-MAE, CMA-ME: optima, determinism, save/restore, replay."""
 
 import dataclasses
 import os
@@ -15,6 +15,7 @@ from hand_codesign.core.genome import genome_spec, seed_genome
 from hand_codesign.core.optimizers import (
     Candidate, closest_to_zero, CmaEs, least_hypervolume_contributor, make_optimizer, MoCmaEs,
     non_dominated, OptimizerError, replay, ReplayError, TellError)
+from hand_codesign.core.quality_diversity import CmaMae, CmaMe
 from hand_codesign.core.restarts import BipopCmaEs, IpopCmaEs
 import numpy as np
 import pytest
@@ -22,8 +23,9 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK5 = ROOT / 'config' / 'tasks' / 'task5.yaml'
 SHIFT = np.linspace(0.2, 0.8, 10)
-# every ask/tell optimizer, CMA-ES with restarts (core.restarts) included
-ALGORITHMS = [CmaEs, MoCmaEs, IpopCmaEs, BipopCmaEs]
+# every ask/tell optimizer, CMA-ES with restarts (core.restarts) and quality-diversity search
+# (core.quality_diversity) included
+ALGORITHMS = [CmaEs, MoCmaEs, IpopCmaEs, BipopCmaEs, CmaMae, CmaMe]
 
 
 def shifted_sphere(x):
@@ -239,6 +241,7 @@ def test_optimizers_write_no_files(tmp_path, monkeypatch):
     run(CmaEs(4, [1.0], 6, 30, seed=0), shifted_sphere_4d)
     run(MoCmaEs(4, [1.0, 1.0], 6, 5, seed=0), zdt1)
     run(IpopCmaEs(4, [1.0], 6, 30, seed=0, stagnation=2), shifted_sphere_4d)
+    run(CmaMae(4, [1.0], 6, 10, seed=0), shifted_sphere_4d)
     assert list(tmp_path.iterdir()) == []
 
 

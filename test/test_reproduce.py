@@ -88,6 +88,13 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
         'worst', 0.25, 'generation')
     for task in (worst, resampled, both):  # nothing else changed
         assert task.replace(worlds=paper.worlds, source_text=paper.source_text) == paper
+    for name in ('levers-task5', 'levers-task6'):  # quality diversity, its archive's defaults
+        mae, = [c for c in experiments.EXPERIMENTS[name].configurations if c.key == 'cma-mae']
+        text = (experiments.pinned_dir() / mae.preset).read_text()
+        task = parse_task(experiments.configuration_task_text(mae, text))
+        assert (task.algorithm, task.archive, mae.algorithm_name) == ('cma-mae', None, 'CMA-MAE')
+        assert task.replace(algorithm='cma', source_text='') == parse_task(text).replace(
+            source_text='')
     reduced = levers.budget('reduced')
     assert (reduced.iterations, reduced.population, reduced.seeds) == (40, 40, 5)
     assert experiments.training_worlds(by_key['cma'], reduced) == 16

@@ -228,7 +228,7 @@ def test_a_wrong_algorithm_is_one_line_naming_file_and_key(tmp_path, capsys):
     assert main(['run', '--task', str(path), '--bag', str(tmp_path / 'bag')]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and 'Traceback' not in err
-    expected = 'expected one of cma, mocma, ipop-cma, bipop-cma, got '
+    expected = 'expected one of cma, mocma, ipop-cma, bipop-cma, cma-mae, cma-me, got '
     assert f"{path}: optimizer.algorithm: {expected}'ipop'" in err
 
 

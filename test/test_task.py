@@ -184,7 +184,8 @@ BAD_VALUES = [
      'expected lower <= upper, got [0.09, 0.04]'),
     ('randomization.scale', [1.5, 0.66], 'expected lower <= upper'),
     ('goals.distance', 'chebyshev', 'expected one of euclidean, manhattan'),
-    ('optimizer.algorithm', 'nsga3', 'expected one of cma, mocma, ipop-cma, bipop-cma'),
+    ('optimizer.algorithm', 'nsga3', 'expected one of cma, mocma, ipop-cma, bipop-cma, cma-mae, '
+     'cma-me'),
     ('optimizer.restart_stagnation', 0, 'expected a positive integer, got 0'),
     ('optimizer.restart_stagnation', 5, 'expected no restart_stagnation for cma (it is for '
      'ipop-cma and bipop-cma, which restart CMA-ES)'),

@@ -14,7 +14,8 @@ work on the RunRecord it returns:
 - `recorded_design(record, candidate_id)`: one recorded candidate with its recorded result;
 - `best_candidate_id(record)` and `ranked_candidate_id(record, generation, rank)`: which design
   a verb works on by default and on request;
-- `restarts_of(record)`: the CMA-ES instances of a run with restarts (ipop-cma, bipop-cma).
+- `restarts_of(record)`: the CMA-ES instances of a run with restarts (ipop-cma, bipop-cma);
+- `archive_of(record)`: the quality-diversity optimizer (cma-mae, cma-me) with its archive.
 """
 
 import dataclasses
@@ -30,6 +31,7 @@ from hand_codesign.core.optimizers import OptimizerError
 from hand_codesign.core.optimizers import replay
 from hand_codesign.core.search import Search
 from hand_codesign.core.task import TaskError
+from hand_codesign.core.task_spec import QD_ALGORITHMS
 from hand_codesign.core.task_spec import RESTART_ALGORITHMS
 from hand_codesign.errors import UserError
 import numpy as np
@@ -473,6 +475,29 @@ def restarts_of(record):
     except OptimizerError:
         return []
     return list(search.optimizer.restarts)
+
+
+def archive_of(record):
+    """
+    Return the core.quality_diversity optimizer of a cma-mae or cma-me run, else None.
+
+    The bag holds the evaluations, not the archive: the search is replayed from the told
+    objectives (it is deterministic, and the descriptors are computed from the genomes), which
+    rebuilds the archive exactly as the run had it, elites, candidate ids and all. A hierarchy
+    or a two-stage run gives the archive of its last optimization.
+    """
+    try:
+        task = run_task_of(record)
+    except UserError:
+        return None
+    if task.algorithm not in QD_ALGORITHMS:
+        return None
+    search = Search(task)
+    try:
+        replay(search, told_objectives(record))
+    except OptimizerError:
+        return None
+    return search.optimizer
 
 
 def ranked_candidate_id(record, generation=None, rank=0):

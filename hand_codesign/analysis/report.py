@@ -14,9 +14,14 @@ Writes into DIR (default: `<bag>_report` next to the bag):
   best fitness so far.
 - `pareto.png` and `pareto_front.csv` for MO-CMA-ES runs: the Pareto front of every
   generation, coloured by generation, and the final front.
+- `archive.png` and `archive.csv` for quality-diversity runs (cma-mae, cma-me): a heat map of
+  the archive over its two descriptors, each cell coloured by its elite's weighted sum, and
+  every elite (candidate id, generation, cell, descriptor values, weighted sum), best first.
+  The archive is rebuilt by replaying the search from the bag's evaluations.
 - `report.md`: task, seed, budget, wall time, evaluations per second, the figures, and the
   best design with its parameters in physical units; for a run with restarts (ipop-cma,
-  bipop-cma) the generation, population and cause of each restart (the search replayed).
+  bipop-cma) the generation, population and cause of each restart (the search replayed); for
+  a quality-diversity run the archive's best designs.
 
 It prints a summary table to the terminal.
 """
@@ -31,6 +36,7 @@ from hand_codesign.errors import UserError
 import numpy as np
 
 MAX_TABLE_ROWS = 12
+ELITES_LISTED = 10  # the archive's best designs in the terminal and in report.md
 
 
 def analyze_command(arguments):
@@ -270,6 +276,8 @@ class Report:
                        if self.names else [])
         self.best = self._best_design()
         self.restarts = records.restarts_of(record)  # of ipop-cma, bipop-cma; else []
+        self.archive = records.archive_of(record)  # of cma-mae, cma-me; else None
+        self.elites = self.archive.elites() if self.archive is not None else []
         self.rig = rig_comparison(record)   # prediction against measurement, if any
 
     # ---------------------------------------------------------------- facts
@@ -326,6 +334,7 @@ class Report:
             if info.resumed_from:
                 facts.append(('resumed from', info.resumed_from))
             facts += restart_facts(self.restarts)
+            facts += self.archive_facts()
         else:
             facts.append(('task', '(unknown: the bag holds no RunInfo)'))
         wall = self.wall_time
@@ -355,6 +364,70 @@ class Report:
         if record.truncated:
             facts.append(('bag state', 'truncated: read up to the cut'))
         return facts
+
+    def archive_facts(self):
+        """Return [('archive', text)] of a quality-diversity run, else []."""
+        archive = self.archive
+        if archive is None:
+            return []
+        cells = archive.cells[0] * archive.cells[1]
+        axes = ' x '.join(f'{name} [{low:.4g}, {high:.4g}]' for name, (low, high) in
+                          zip(archive.describe.names, archive.ranges))
+        return [('archive', f'{len(self.elites)} of {cells} cells filled, over {axes} '
+                            f'({len(archive.batch_sizes)} emitters, '
+                            f'{sum(archive.emitter_restarts)} restarts)')]
+
+    def elite_rows(self, count=None):
+        """Return the listed elites as rows of text: id, generation, descriptors, fitness."""
+        recommended = self.archive.result.candidate_id if self.archive.result else None
+        rows = []
+        for elite in self.elites[:count]:
+            rows.append([str(elite.candidate_id), str(elite.generation)]
+                        + [f'{value:.4g}' for value in elite.descriptors]
+                        + [f'{elite.fitness:.4g}',
+                           'recommended' if elite.candidate_id == recommended else ''])
+        return rows
+
+    def elite_header(self):
+        names = self.archive.describe.names
+        units = self.archive.describe.units
+        return (['candidate', 'generation']
+                + [f'{name} ({unit})' if unit else name for name, unit in zip(names, units)]
+                + ['fitness', ''])
+
+    def write_archive_csv(self, path):
+        archive = self.archive
+        names = list(archive.describe.names)
+        header = (['candidate_id', 'generation'] + [f'cell_{name}' for name in names] + names
+                  + ['fitness'])
+        elites = self.elites
+        columns = [[str(e.candidate_id) for e in elites], [str(e.generation) for e in elites]]
+        columns += [[str(e.cell[i]) for e in elites] for i in range(2)]
+        columns += [_float_texts(np.array([e.descriptors[i] for e in elites]))
+                    for i in range(2)]
+        columns.append(_float_texts(np.array([e.fitness for e in elites])))
+        write_csv(path, header, columns)
+
+    def archive_markdown(self):
+        if self.archive is None:
+            return []
+        lines = ['', '## Archive', '', '![archive.png](archive.png)', '',
+                 f'Its {min(ELITES_LISTED, len(self.elites))} best designs of '
+                 f'{len(self.elites)} (all in `archive.csv`); the recommended one is the '
+                 "run's result:", '']
+        header = self.elite_header()
+        lines += ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
+        lines += ['| ' + ' | '.join(row) + ' |' for row in self.elite_rows(ELITES_LISTED)]
+        return lines
+
+    def archive_text(self):
+        if self.archive is None:
+            return ''
+        table = [self.elite_header()] + self.elite_rows(ELITES_LISTED)
+        widths = [max(len(row[column]) for row in table) for column in range(len(table[0]))]
+        return '\n'.join([f'archive: the {len(table) - 1} best of {len(self.elites)} elites'] + [
+            '  '.join(cell.rjust(width) for cell, width in zip(row, widths)).rstrip()
+            for row in table])
 
     def best_parameters(self):
         """Return [(gene, physical value, unit, lower, upper, normalized)] of the best design."""
@@ -393,6 +466,10 @@ class Report:
             files.append(out / 'pareto_front.csv')
             self.write_front_csv(files[-1])
         files += figures
+        if self.archive is not None and self.elites:
+            files.append(plot_archive(out / 'archive.png', self.archive, self.record.run_id))
+            files.append(out / 'archive.csv')
+            self.write_archive_csv(files[-1])
         if self.rig is not None:
             files.append(out / 'rig_gap.csv')
             self.rig.write_csv(files[-1])
@@ -443,6 +520,7 @@ class Report:
         for name in figure_names:
             lines += [f'![{name}]({name})', '']
         lines += self.best_markdown()
+        lines += self.archive_markdown()
         if self.rig is not None:
             lines += self.rig.markdown('rig_gap.png')
         lines += ['', '## Files', '',
@@ -450,6 +528,8 @@ class Report:
                   '- `generations.csv`: best and median of each objective per generation']
         if self.fronts:
             lines.append('- `pareto_front.csv`: the final Pareto front')
+        if self.elites:
+            lines.append('- `archive.csv`: every elite of the archive, best first')
         if self.task is not None:
             lines += ['', '## Task file as run', '', '```yaml', self.info.task_yaml.rstrip(),
                       '```']
@@ -503,6 +583,8 @@ class Report:
                           f'{design.generation}{horizon}), {fitness} ({objectives})']
             for name, value, unit, *_ in self.best_parameters():
                 lines.append(f'  {name:<40} {value:>12.6g} {unit}')
+        if self.elites:
+            lines += ['', self.archive_text()]
         if self.rig is not None:
             lines += ['', self.rig.text()]
         return '\n'.join(lines)
@@ -597,6 +679,49 @@ def plot_convergence(path, generations, names, title, restarts=()):
         ax.axis('off')
     figure.suptitle(f'convergence of {title}' if title else 'convergence', fontsize='medium')
     figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    pyplot.close(figure)
+    return pathlib.Path(path)
+
+
+def plot_archive(path, archive, title):
+    """Plot a quality-diversity archive: its grid over two descriptors, colour = fitness."""
+    pyplot = _pyplot()
+    grid = archive.fitness_grid()
+    names, units = archive.describe.names, archive.describe.units
+    (x_low, x_high), (y_low, y_high) = archive.ranges
+    figure, ax = pyplot.subplots(figsize=(6.4, 5.0))
+    # a cell's fitness is its elite's weighted sum (lower is better): the best cells darkest.
+    # Cells far above the others (a start collision costs 10,000 per objective) would flatten
+    # the scale: above 10 times the median cell they are drawn grey, off the scale.
+    shown = np.ma.masked_invalid(grid.T)
+    values = grid[np.isfinite(grid)]
+    ceiling = 10.0 * abs(float(np.median(values)))
+    within = values[values <= ceiling]
+    colormap = pyplot.get_cmap('viridis').with_extremes(over='lightgrey')
+    image = ax.pcolormesh(np.linspace(x_low, x_high, archive.cells[0] + 1),
+                          np.linspace(y_low, y_high, archive.cells[1] + 1), shown,
+                          cmap=colormap, shading='flat',
+                          vmax=float(within.max()) if len(within) else None)
+    over = len(values) - len(within)
+    best = archive.result
+    if best is not None:
+        point = archive.describe(best.x)
+        ax.plot(point[0], point[1], marker='*', markersize=14, color='tab:red',
+                markeredgecolor='white', linestyle='none',
+                label=f'recommended: candidate {best.candidate_id} ({best.fitness:.4g})')
+    if over:
+        ax.fill_between([], [], color='lightgrey',
+                        label=f'over 10 x the median cell ({over} cell{"s" if over > 1 else ""})')
+    if best is not None or over:
+        ax.legend(fontsize='small', loc='upper right')
+    figure.colorbar(image, ax=ax, extend='max' if over else 'neither',
+                    label='weighted sum of the objectives (lower is better)')
+    ax.set_xlabel(f'{names[0]} ({units[0]})' if units[0] else names[0])
+    ax.set_ylabel(f'{names[1]} ({units[1]})' if units[1] else names[1])
+    filled = int(np.isfinite(grid).sum())
+    ax.set_title(f'{archive.algorithm} archive of {title}: {filled} of {grid.size} cells',
+                 fontsize='medium')
     figure.savefig(path, dpi=100)
     pyplot.close(figure)
     return pathlib.Path(path)

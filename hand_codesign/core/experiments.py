@@ -17,9 +17,10 @@ Budgets: `paper` is Table I's; `reduced` fits this 2-core machine in about an ho
 experiment (Tasks 5 and 6) to a few hours (Tasks 1 and 4); `smoke` takes minutes.
 
 Beyond the paper, `levers-task5` and `levers-task6` compare the paper's algorithms with the
-levers of a more reliable search (restarts, the worst worlds, resampled worlds) on the same
-evaluations; a budget may fix the training worlds of every configuration (`reduced`: issue
-12's 40 x 40 on 16 worlds). They run from the same pinned presets and are not part of `all`.
+levers of a more reliable search (restarts, the worst worlds, resampled worlds, quality
+diversity with CMA-MAE and its archive's recommended design) on the same evaluations; a budget
+may fix the training worlds of every configuration (`reduced`: issue 12's 40 x 40 on 16
+worlds). They run from the same pinned presets and are not part of `all`.
 """
 
 import dataclasses
@@ -32,7 +33,7 @@ from hand_codesign.core.measures import Tolerance
 import yaml
 
 ALGORITHM_NAMES = {'cma': 'CMA-ES', 'mocma': 'MO-CMA-ES', 'ipop-cma': 'IPOP-CMA-ES',
-                   'bipop-cma': 'BIPOP-CMA-ES'}
+                   'bipop-cma': 'BIPOP-CMA-ES', 'cma-mae': 'CMA-MAE', 'cma-me': 'CMA-ME'}
 BUDGET_NAMES = ('smoke', 'reduced', 'paper')
 
 
@@ -42,7 +43,7 @@ class Configuration:
 
     key: str  # file-safe name, unique in the experiment
     preset: str  # file name in config/reproduce/
-    algorithm: str  # cma | mocma | ipop-cma | bipop-cma
+    algorithm: str  # cma | mocma | ipop-cma | bipop-cma | cma-mae | cma-me
     world_states: int  # training worlds per candidate (unless the budget sets them)
     policy: str  # torque | pd (for the table)
     options: Tuple[Tuple[str, object], ...] = ()  # (dotted task key, value) set in the preset
@@ -109,7 +110,8 @@ def _lever_configurations(preset):
               ('cma-resample', 'cma', (('worlds.resample', 'generation'),)),
               ('cma-worst25-resample', 'cma', (('worlds.aggregate', 'worst'),
                                                ('worlds.fraction', 0.25),
-                                               ('worlds.resample', 'generation'))))
+                                               ('worlds.resample', 'generation'))),
+              ('cma-mae', 'cma-mae', ()))
     return tuple(Configuration(key, preset, algorithm, LEVER_WORLDS, 'torque', options)
                  for key, algorithm, options in levers)
 
@@ -158,8 +160,8 @@ EXPERIMENTS = {
     'levers-task5': Experiment(
         'levers-task5',
         'beyond the paper: Task 5 (torque) with CMA-ES and MO-CMA-ES against restarts '
-        '(IPOP-, BIPOP-CMA-ES), the worst quarter of the worlds (CVaR) and worlds resampled '
-        'each generation, on the same evaluations',
+        '(IPOP-, BIPOP-CMA-ES), the worst quarter of the worlds (CVaR), worlds resampled '
+        'each generation and quality diversity (CMA-MAE), on the same evaluations',
         _lever_configurations('task5.yaml'), PLANE_5MM, _lever_budgets(64),
         convergence=True, beyond_paper=True),
     'levers-task6': Experiment(

@@ -1,8 +1,9 @@
 """
 Ask/tell optimizers of the co-design: CMA-ES (pycma) and MO-CMA-ES (DEAP).
 
-CMA-ES with restarts (IPOP, BIPOP) builds on CmaEs in `core.restarts`; `make_optimizer`
-returns any of them.
+CMA-ES with restarts (IPOP, BIPOP) builds on CmaEs in `core.restarts`, quality-diversity
+search (CMA-MAE, CMA-ME, with pyribs) on AskTellOptimizer in `core.quality_diversity`;
+`make_optimizer` returns any of them.
 
 Both search the normalized genome space (sections III.C and III.D of the paper): the search
 starts at the centre of the bounds (0.5 per coordinate) or at a seeded design, with step size
@@ -548,15 +549,18 @@ def make_optimizer(task, dim, first_id=0, seed_x=None, seed=None):
     Return the optimizer of task.algorithm for a genome of `dim` normalized values.
 
     cma and mocma are this module's; ipop-cma and bipop-cma (CMA-ES with restarts, which also
-    take task.restart_stagnation) are core.restarts'. It takes population, iteration budget,
+    take task.restart_stagnation) are core.restarts'; cma-mae and cma-me (quality diversity,
+    which also take task.archive and the task's design descriptors) core.quality_diversity's.
+    It takes population, iteration budget,
     objective weights, initial step size and seed from the task. It starts at `seed_x` if
     given, else at the task's seed design (seeded search, Tasks 1 and 2: the normalized genome
     of `task.seed_design`), else at the centre of the bounds. `seed` replaces task.seed as the
     optimizer's seed (the worlds keep task.seed).
     """
-    # imported here: core.restarts builds on this module's CmaEs
+    # imported here: core.restarts and core.quality_diversity build on this module
+    from hand_codesign.core.quality_diversity import ALGORITHMS as QD_ALGORITHMS
     from hand_codesign.core.restarts import ALGORITHMS as RESTART_ALGORITHMS
-    classes = {'cma': CmaEs, 'mocma': MoCmaEs, **RESTART_ALGORITHMS}
+    classes = {'cma': CmaEs, 'mocma': MoCmaEs, **RESTART_ALGORITHMS, **QD_ALGORITHMS}
     if task.algorithm not in classes:
         raise OptimizerError(
             f'task {task.name!r}: algorithm must be one of {sorted(classes)}, got '
@@ -564,12 +568,25 @@ def make_optimizer(task, dim, first_id=0, seed_x=None, seed=None):
     design = task.seed_design
     if seed_x is None and design is not None and design.hand.structure == tuple(task.structure):
         seed_x = seed_genome(task)
-    extra = ({'stagnation': task.restart_stagnation} if task.algorithm in RESTART_ALGORITHMS
-             else {})
+    extra = {}
+    if task.algorithm in RESTART_ALGORITHMS:
+        extra = {'stagnation': task.restart_stagnation}
+    elif task.algorithm in QD_ALGORITHMS:
+        extra = _archive_options(task)
     return classes[task.algorithm](
         dim, task.objective_weights, task.population, task.iterations,
         task.seed if seed is None else seed,
         first_id=first_id, x0=seed_x, sigma0=task.initial_sigma, **extra)
+
+
+def _archive_options(task):
+    """Return the keyword arguments of a quality-diversity optimizer from task.archive."""
+    from hand_codesign.core.descriptors import DesignDescriptors
+    from hand_codesign.core.task_spec import ArchiveSpec
+    archive = task.archive or ArchiveSpec()
+    return {'describe': DesignDescriptors(task, archive.descriptors), 'cells': archive.cells,
+            'ranges': archive.ranges, 'emitters': archive.emitters,
+            'learning_rate': archive.learning_rate}
 
 
 def replay(optimizer, recorded, recorded_x=None):

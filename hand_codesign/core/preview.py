@@ -47,6 +47,7 @@ from hand_codesign.core.objectives import goal_schedule
 from hand_codesign.core.optimizers import make_optimizer
 from hand_codesign.core.robustness import world_values
 from hand_codesign.core.sim import EventPlan
+from hand_codesign.core.task_spec import QD_ALGORITHMS
 from hand_codesign.core.worlds import object_state, QUANTITIES, world_states
 
 KINDS = ('position', 'orientation')
@@ -200,7 +201,19 @@ def budget(task, structures, grown=()):
         'structures': [{key: value for key, value in entry.items() if key != 'genome'}
                        for entry in list(structures) + list(grown)],
         'may_end_early': may_end_early(task),
+        'archive': archive_preview(task),
     }
+
+
+def archive_preview(task):
+    """Return the archive of a quality-diversity task (cma-mae, cma-me), else None."""
+    if task.algorithm not in QD_ALGORITHMS:
+        return None
+    optimizer = make_optimizer(task, genome_spec(task).size)
+    return {'descriptors': list(optimizer.describe.names),
+            'units': list(optimizer.describe.units),
+            'cells': list(optimizer.cells), 'ranges': [list(r) for r in optimizer.ranges],
+            'emitters': list(optimizer.batch_sizes), 'learning_rate': optimizer.learning_rate}
 
 
 def may_end_early(task):

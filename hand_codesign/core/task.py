@@ -86,12 +86,22 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
     optimizer:
       algorithm: cma                 # cma (weighted sum) | mocma (Pareto front) | ipop-cma |
                                      # bipop-cma (CMA-ES with restarts, core.restarts; the
-                                     # budget stays iterations x population evaluations)
+                                     # budget stays iterations x population evaluations) |
+                                     # cma-mae | cma-me (quality diversity: an archive of
+                                     # designs, core.quality_diversity)
       iterations: 100                # generations (per hand structure)
       population: 80
       initial_sigma: 0.1             # optional, in the normalized genome space
       restart_stagnation: 20         # optional, ipop-cma / bipop-cma only: generations
                                      # without improvement that end a CMA-ES instance
+      archive:                       # optional, cma-mae / cma-me only (these defaults):
+        descriptors: [finger_length, joint_range]  # two of core.descriptors' descriptors;
+                                     # default these, or initial_angle for joints without limits
+        cells: [10, 10]              # of the grid, along each descriptor
+        ranges: [[0.16, 0.36], [0, pi]]            # optional; default: the least and
+                                     # greatest value on the task's genome bounds
+        emitters: 4                  # optional; default population // 10, at least 1
+        learning_rate: 0.01          # optional: CMA-MAE's alpha (cma-me: always 1)
     hierarchy:                       # optional: search hand structures bottom-up (Fig. 1)
       start: [1]
       stop_structure: [2, 3]         # optional: last structure; or max_fingers/max_joints
@@ -162,7 +172,7 @@ holding the last one afterwards.
 # task_checks; this module is the import path users know.
 from hand_codesign.core.rotations import axis_angle_quaternion
 from hand_codesign.core.task_reader import load_task, parse_design, parse_task
-from hand_codesign.core.task_spec import (ALGORITHMS, AXES, Bounds, DISTANCES,
+from hand_codesign.core.task_spec import (ALGORITHMS, ArchiveSpec, AXES, Bounds, DISTANCES,
                                           EarlyTerminationSpec, GoalSpec, HandSpec, HierarchySpec,
                                           HorizonSpec, MORPHOLOGY_PARAMETERS, MorphologySpec,
                                           ObjectSpec, OrientationGoal, PARAMETER_MODES,
@@ -173,11 +183,11 @@ from hand_codesign.core.task_spec import (ALGORITHMS, AXES, Bounds, DISTANCES,
                                           WORLD_AGGREGATES, WORLD_RESAMPLING, WorldsSpec)
 
 __all__ = [
-    'ALGORITHMS', 'AXES', 'axis_angle_quaternion', 'Bounds', 'DISTANCES', 'EarlyTerminationSpec',
-    'GoalSpec', 'HandSpec', 'HierarchySpec', 'HorizonSpec', 'load_task', 'MORPHOLOGY_PARAMETERS',
-    'MorphologySpec', 'ObjectSpec', 'OrientationGoal', 'PARAMETER_MODES', 'ParameterSpec',
-    'parse_design', 'parse_task', 'PhysicsSpec', 'POLICY_KINDS', 'PolicySpec', 'PositionGoal',
-    'RandomizationSpec', 'resting_height', 'RESTING_TOLERANCE', 'SHAPES', 'STARTS', 'SymmetrySpec',
-    'Task', 'TaskError', 'TORQUE_MODES', 'TorquePenaltySpec', 'WeightsSpec', 'WORLD_AGGREGATES',
-    'WORLD_RESAMPLING', 'WorldsSpec',
+    'ALGORITHMS', 'ArchiveSpec', 'AXES', 'axis_angle_quaternion', 'Bounds', 'DISTANCES',
+    'EarlyTerminationSpec', 'GoalSpec', 'HandSpec', 'HierarchySpec', 'HorizonSpec', 'load_task',
+    'MORPHOLOGY_PARAMETERS', 'MorphologySpec', 'ObjectSpec', 'OrientationGoal', 'PARAMETER_MODES',
+    'ParameterSpec', 'parse_design', 'parse_task', 'PhysicsSpec', 'POLICY_KINDS', 'PolicySpec',
+    'PositionGoal', 'RandomizationSpec', 'resting_height', 'RESTING_TOLERANCE', 'SHAPES', 'STARTS',
+    'SymmetrySpec', 'Task', 'TaskError', 'TORQUE_MODES', 'TorquePenaltySpec', 'WeightsSpec',
+    'WORLD_AGGREGATES', 'WORLD_RESAMPLING', 'WorldsSpec',
 ]

@@ -6,8 +6,8 @@ Each raises TaskError naming the key to fix.
 
 import math
 
-from hand_codesign.core.task_spec import (ALGORITHMS, MORPHOLOGY_PARAMETERS,
-                                          RESTART_ALGORITHMS, resting_height,
+from hand_codesign.core.task_spec import (ALGORITHMS, ArchiveSpec, MORPHOLOGY_PARAMETERS,
+                                          QD_ALGORITHMS, RESTART_ALGORITHMS, resting_height,
                                           RESTING_TOLERANCE, TaskError)
 import numpy as np
 
@@ -59,6 +59,26 @@ def check_task(task):
     _check_horizon(task, fail)
     _check_stages(task, fail)
     _check_worlds(task, fail)
+    _check_archive(task, fail)
+
+
+def _check_archive(task, fail):
+    if task.algorithm not in QD_ALGORITHMS:
+        if task.archive is not None:
+            fail('optimizer.archive', f'no archive for {task.algorithm} (it is for '
+                 f'{" and ".join(QD_ALGORITHMS)}, the quality-diversity searches)')
+        return
+    archive = task.archive or ArchiveSpec()
+    if archive.learning_rate is not None and task.algorithm == 'cma-me':
+        fail('optimizer.archive.learning_rate', 'no learning_rate for cma-me (its archive '
+             'replaces an elite by any better design: a learning rate of 1); cma-mae takes one')
+    if archive.emitters is not None and archive.emitters > task.population // 2:
+        fail('optimizer.archive.emitters', f'at most population / 2 = {task.population // 2} '
+             f'emitters (each samples at least 2 of the {task.population} candidates), got '
+             f'{archive.emitters}')
+    # imported here: the descriptors decode genomes, and the genome module imports this one
+    from hand_codesign.core.descriptors import default_descriptors, descriptor_ranges
+    descriptor_ranges(task, archive.descriptors or default_descriptors(task))
 
 
 def _check_worlds(task, fail):

@@ -15,7 +15,8 @@ from hand_codesign.core.design import (ControllerDesign, Design, FingerDesign, H
                                        JointDesign)
 from hand_codesign.core.rotations import axis_angle_quaternion
 from hand_codesign.core.task_checks import check_task
-from hand_codesign.core.task_spec import (ALGORITHMS, AXES, Bounds, DISTANCES,
+from hand_codesign.core.task_spec import (ALGORITHMS, ArchiveSpec, AXES, Bounds,
+                                          DESCRIPTOR_NAMES, DISTANCES,
                                           EarlyTerminationSpec, GoalSpec, HandSpec, HierarchySpec,
                                           HorizonSpec, MORPHOLOGY_PARAMETERS, MorphologySpec,
                                           ObjectSpec, OrientationGoal, ParameterSpec, PhysicsSpec,
@@ -174,7 +175,7 @@ class _Reader:
         hand, structure = self.hand(top['hand'], 'hand', hierarchy)
         optimizer = self.mapping(top['optimizer'], 'optimizer',
                                  required=('algorithm', 'iterations', 'population'),
-                                 optional=('initial_sigma', 'restart_stagnation'))
+                                 optional=('initial_sigma', 'restart_stagnation', 'archive'))
         seed_design = None
         if top.get('seed_design') is not None:
             seed_design = self.seed_design(top['seed_design'], 'seed_design')
@@ -204,6 +205,8 @@ class _Reader:
             restart_stagnation=(self.integer(optimizer['restart_stagnation'],
                                              'optimizer.restart_stagnation')
                                 if optimizer.get('restart_stagnation') is not None else None),
+            archive=(self.archive(optimizer['archive'], 'optimizer.archive')
+                     if optimizer.get('archive') is not None else None),
             weights=self.weights(top.get('weights', {}), 'weights'),
             physics=self.physics(top.get('physics', {}), 'physics'),
             worlds=self.worlds(top.get('worlds', {}), 'worlds'),
@@ -541,6 +544,45 @@ class _Reader:
                           final_check=self.integer(section.get('final_check',
                                                                default.final_check),
                                                    _join(key, 'final_check')))
+
+    def archive(self, value, key):
+        section = self.mapping(value, key, optional=('descriptors', 'cells', 'ranges',
+                                                     'emitters', 'learning_rate'))
+        default = ArchiveSpec()
+        pairs = {}
+        for name in ('descriptors', 'cells', 'ranges'):
+            if name in section and (not isinstance(section[name], list)
+                                    or len(section[name]) != 2):
+                self.fail(_join(key, name), 'a list of two entries, one per descriptor',
+                          section[name])
+        descriptors = None
+        if 'descriptors' in section:
+            descriptors = tuple(self.choice(item, f'{key}.descriptors[{index}]',
+                                            DESCRIPTOR_NAMES)
+                                for index, item in enumerate(section['descriptors']))
+        if descriptors is not None and descriptors[0] == descriptors[1]:
+            self.fail(_join(key, 'descriptors'), 'two different descriptors',
+                      list(descriptors))
+        cells = tuple(self.integer(item, f'{key}.cells[{index}]') for index, item in
+                      enumerate(section.get('cells', default.cells)))
+        if 'ranges' in section:
+            for index, pair in enumerate(section['ranges']):
+                bounds = self.bounds(pair, f'{key}.ranges[{index}]')
+                if not bounds.upper > bounds.lower:
+                    self.fail(f'{key}.ranges[{index}]', 'lower < upper', pair)
+                pairs[index] = (bounds.lower, bounds.upper)
+        learning_rate = None
+        if 'learning_rate' in section:
+            learning_rate = self.number(section['learning_rate'], _join(key, 'learning_rate'))
+            if not 0 <= learning_rate <= 1:
+                self.fail(_join(key, 'learning_rate'), 'a number in [0, 1]',
+                          section['learning_rate'])
+        return ArchiveSpec(
+            descriptors=descriptors, cells=cells,
+            ranges=tuple(pairs[index] for index in range(2)) if pairs else None,
+            emitters=(self.integer(section['emitters'], _join(key, 'emitters'))
+                      if 'emitters' in section else None),
+            learning_rate=learning_rate)
 
     def weights(self, value, key):
         section = self.mapping(value, key, optional=('position', 'orientation'))

@@ -16,8 +16,12 @@ import numpy as np
 SHAPES = ('sphere', 'box', 'capsule')
 STARTS = ('plane', 'midair')
 DISTANCES = ('euclidean', 'manhattan')
-ALGORITHMS = ('cma', 'mocma', 'ipop-cma', 'bipop-cma')
+ALGORITHMS = ('cma', 'mocma', 'ipop-cma', 'bipop-cma', 'cma-mae', 'cma-me')
 RESTART_ALGORITHMS = ('ipop-cma', 'bipop-cma')  # CMA-ES with restarts (core.restarts)
+QD_ALGORITHMS = ('cma-mae', 'cma-me')  # quality-diversity search (core.quality_diversity)
+# the descriptors of a design an archive may span (core.descriptors)
+DESCRIPTOR_NAMES = ('finger_length', 'length_asymmetry', 'joint_range', 'initial_angle',
+                    'finger_spread', 'friction')
 POLICY_KINDS = ('torque', 'pd')
 TORQUE_MODES = ('constant', 'interpolated')
 PARAMETER_MODES = ('fixed', 'bounds', 'delta', 'seed', 'none')
@@ -270,6 +274,25 @@ class WorldsSpec:
 
 
 @dataclass(frozen=True)
+class ArchiveSpec:
+    """
+    The archive of a quality-diversity search (YAML `optimizer.archive`, optional).
+
+    Two descriptors of the design (core.descriptors; None: finger_length and joint_range, or
+    initial_angle for joints without limits) span a grid of `cells`; `ranges` (None: the least
+    and greatest value each descriptor takes on the task's genome bounds) its extent.
+    `emitters` (None: one per 10 candidates) share the population; `learning_rate` (None:
+    0.01) is CMA-MAE's alpha.
+    """
+
+    descriptors: Optional[Tuple[str, ...]] = None
+    cells: Tuple[int, ...] = (10, 10)
+    ranges: Optional[Tuple[Tuple[float, float], ...]] = None
+    emitters: Optional[int] = None
+    learning_rate: Optional[float] = None
+
+
+@dataclass(frozen=True)
 class HierarchySpec:
     """The bottom-up search over hand structures of Fig. 1."""
 
@@ -305,6 +328,8 @@ class Task:
     # generations without improvement after which ipop-cma / bipop-cma restart (core.restarts);
     # None: their default window
     restart_stagnation: Optional[int] = None
+    # the archive of cma-mae / cma-me (core.quality_diversity); None: ArchiveSpec's defaults
+    archive: Optional[ArchiveSpec] = None
     weights: WeightsSpec = WeightsSpec()
     physics: PhysicsSpec = PhysicsSpec()
     worlds: WorldsSpec = WorldsSpec()
