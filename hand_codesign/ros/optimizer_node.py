@@ -26,6 +26,7 @@ from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign.ros.topics import deliver
 from hand_codesign_msgs.msg import RunInfo
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from rclpy.task import Future
 
@@ -73,8 +74,9 @@ class OptimizerNode(Node):
             task, self.settings['run_id'] or default_run_id(task), self, resumed,
             self.settings['heartbeat_timeout'], self.settings['evaluation_timeout'],
             self.settings['evaluators_expected'], audit_fraction=self.settings['audit_fraction'])
+        matched = PublisherEventCallbacks(matched=self.start_if_ready)
         self.publishers_ = {name: self.create_publisher(
-            topics.RECORDED_MESSAGE_TYPES[name], name, topics.QOS[name])
+            topics.RECORDED_MESSAGE_TYPES[name], name, topics.QOS[name], event_callbacks=matched)
             for name in topics.OPTIMIZER_TOPICS}
         self.published = dict.fromkeys(self.publishers_, 0)
         for name, callback in ((topics.EVALUATIONS, self.on_evaluation),
@@ -94,8 +96,14 @@ class OptimizerNode(Node):
         wanted = self.settings['subscribers_expected']
         self.run.tick(all(p.get_subscription_count() >= wanted for p in self.publishers_.values()))
 
+    def start_if_ready(self, *event):
+        # the run starts on the heartbeat or match that completes it, not at the next tick
+        if self.run.started is None:
+            self.tick()
+
     def on_status(self, message):
         self.run.heard_from(message.evaluator_id, message.capacity, message.run_id)
+        self.start_if_ready()
 
     def on_evaluation(self, message):
         key = message.run_id, message.candidate_id, message.evaluator_id
