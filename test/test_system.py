@@ -106,6 +106,9 @@ def test_bag_holds_every_published_message(one_evaluator_run):
     assert record.message_counts['/candidates'] == published['candidates']
     assert record.message_counts['/generation_summary'] == published['generation_summary']
     assert record.message_counts['/run_info'] == published['run_info'] == 1
+    # the optimizer starts once the recorder records (ros.runner): from the first candidate on
+    first_sends = record.candidates['candidate_id'][record.candidates['attempt'] == 0]
+    assert sorted(first_sends) == list(range(3 * 6))
     # each evaluator counts its answers in its heartbeats (EvaluatorStatus.evaluations_done)
     statuses = record.evaluator_status
     last_count = {}

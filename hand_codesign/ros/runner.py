@@ -1,9 +1,11 @@
 """
 The processes of a run on an isolated ROS 2 domain (`hand-codesign run`, hand_codesign.commands).
 
-Starts the recorder first and waits until it is ready, then the evaluators and the optimizer;
-relays the optimizer's progress; when the optimizer ends (or on Ctrl-C) stops the evaluators,
-then the recorder, so that the bag holds every message and is closed properly.
+Starts the recorder and the evaluators side by side, and the optimizer once the recorder says
+that it records (so the bag gets every candidate from the first; the evaluators announce
+themselves only once the optimizer and the recorder are there); relays the optimizer's
+progress; when the optimizer ends (or on Ctrl-C) stops the evaluators, then the recorder, so
+that the bag holds every message and is closed properly.
 
 While the optimizer runs, the recorder and the evaluators are supervised: when one exits,
 core.supervision.Supervisor decides whether it is started again (a restarted recorder continues
@@ -42,6 +44,7 @@ from hand_codesign.core.supervision import node_name
 from hand_codesign.core.supervision import RECORDER
 from hand_codesign.core.supervision import Supervisor
 from hand_codesign.errors import UserError
+from hand_codesign.ros.discovery import start_profile
 
 DOMAIN_IDS = range(1, 101)
 STOP_TIMEOUT = 30.0
@@ -86,6 +89,7 @@ class System:
                                                          'LOCALHOST'),
             AMENT_PREFIX_PATH=os.environ.get('AMENT_PREFIX_PATH', sys.prefix),
             RCUTILS_CONSOLE_OUTPUT_FORMAT='[{severity}] [{name}]: {message}')
+        self.environment.update(start_profile(self.environment))
         self.discovery = discovery
         if discovery is not None:
             self.environment.update(discovery.environment())
@@ -128,16 +132,21 @@ class System:
         rig (hand_codesign.ros.sim_rig_node); rig_parameters go to the simulated rig.
         """
         self.supervisor = Supervisor(evaluators, start_timeout=self.start_timeout)
-        self.start_recorder()   # it creates the bag folder; it finds a server started later
+        # every process logs into the bag folder from its start; the recorder writes beside
+        (self.bag / 'logs').mkdir(parents=True, exist_ok=True)
+        self.recorder = self.spawn_recorder()  # it finds a discovery server started later
         if self.live is not None:
-            self.start_live_view()
-        (self.bag / 'logs').mkdir(exist_ok=True)
+            self.live_view = self.spawn_live_view()
         if self.discovery is not None:
             self.discovery.start(self.bag)
             self.say(self.discovery.join_instructions(self.environment['ROS_DOMAIN_ID']))
         for index in range(evaluators):
             self.start_evaluator(evaluator_role(index))
         self.start_rig(rig)
+        # the processes above start side by side; the optimizer sends once the recorder records
+        self.wait_until_ready(self.recorder, RECORDER_READY, 'the recorder')
+        if self.live_view is not None:
+            self.announce_live_view()
         self.optimizer = self.node(optimizer_module, optimizer_parameters, self.key_of(),
                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         relay = threading.Thread(target=self.relay_optimizer, daemon=True)
@@ -175,16 +184,23 @@ class System:
 
     def start_recorder(self):
         """Start the recorder and wait until it records; a restart continues the same bag."""
-        restart = self.supervisor.started(RECORDER) != RECORDER
-        parameters = {'bag_path': self.bag, 'continue_bag': restart}
-        self.recorder = self.node('hand_codesign.ros.recorder_node', parameters,
-                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.recorder = self.spawn_recorder()
         self.wait_until_ready(self.recorder, RECORDER_READY, 'the recorder')
 
-    def start_live_view(self):
+    def spawn_recorder(self):
+        """Return a new recorder process; a restarted one continues the same bag."""
+        restart = self.supervisor.started(RECORDER) != RECORDER
+        parameters = {'bag_path': self.bag, 'continue_bag': restart}
+        return self.node('hand_codesign.ros.recorder_node', parameters,
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+    def spawn_live_view(self):
         host, port = self.live
-        self.live_view = self.node('hand_codesign.ros.live_node', {'host': host, 'port': port},
-                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        return self.node('hand_codesign.ros.live_node', {'host': host, 'port': port},
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+    def announce_live_view(self):
+        """Wait until the live view serves, then tell the user where."""
         line = self.wait_until_ready(self.live_view, LIVE_READY, 'the live view')
         address = line.split(LIVE_READY + ': ', 1)[-1].split()[0]
         self.say(f'live: {address} (in Foxglove: Open connection, Foxglove WebSocket; layout '
