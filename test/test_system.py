@@ -194,7 +194,8 @@ def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run
     key_file = tmp_path / 'host-b.key'
     for _ in range(5):   # another run of this host may claim the free domain first
         domain = free_domain()
-        env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
+                   FASTRTPS_DEFAULT_PROFILES_FILE=str(ROOT / 'test' / 'announce_long.xml'))
         # the intruder waits for the run's RunInfo, then forges an answer to every candidate
         intruder = subprocess.Popen([sys.executable, str(ROOT / 'test' / 'intruder.py')],
                                     env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
