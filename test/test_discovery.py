@@ -24,5 +24,5 @@ def test_a_process_of_a_run_loads_the_start_profile_without_complaint(tmp_path):
 def test_the_users_own_profile_stands():
     for variable in PROFILE_VARIABLES:
         assert start_profile({variable: '/home/me/dds.xml'}) == {}
-    assert start_profile({variable: '' for variable in PROFILE_VARIABLES}) == {
+    assert start_profile(dict.fromkeys(PROFILE_VARIABLES, '')) == {
         PROFILE_VARIABLES[0]: str(START_PROFILE)}

@@ -5,6 +5,8 @@ A user's mistake (a bad parameter, a task the node cannot run) is one error line
 status 2, never a traceback; Ctrl-C and an external shutdown end the node normally (0).
 """
 
+import threading
+
 from hand_codesign.errors import UserError
 import rclpy
 from rclpy.exceptions import ParameterException
@@ -44,3 +46,22 @@ def run_node(make_node, logger_name, args=None, errors=(), until=None, executor=
                 farewell(node)
         rclpy.try_shutdown()
     return 0
+
+
+def on_line(stream, node, callback):
+    """
+    Return an Event set once a line arrives on stream (never if it closes first).
+
+    callback then runs in the node's executor: a process that starts the node tells it
+    something this way, e.g. ros.runner that the run's recorder records.
+    """
+    arrived = threading.Event()
+    guard = node.create_guard_condition(callback)
+
+    def wait():
+        if stream.readline():
+            arrived.set()
+            guard.trigger()
+
+    threading.Thread(target=wait, daemon=True).start()
+    return arrived

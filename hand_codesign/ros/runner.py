@@ -1,11 +1,11 @@
 """
 The processes of a run on an isolated ROS 2 domain (`hand-codesign run`, hand_codesign.commands).
 
-Starts the recorder and the evaluators side by side, and the optimizer once the recorder says
-that it records (so the bag gets every candidate from the first; the evaluators announce
-themselves only once the optimizer and the recorder are there); relays the optimizer's
-progress; when the optimizer ends (or on Ctrl-C) stops the evaluators, then the recorder, so
-that the bag holds every message and is closed properly.
+Starts the recorder, the evaluators and the optimizer side by side; the optimizer sends nothing
+until the runner tells it that the recorder records (so the bag gets every candidate from the
+first; the evaluators announce themselves only once the optimizer and the recorder are there);
+relays the optimizer's progress; when the optimizer ends (or on Ctrl-C) stops the evaluators,
+then the recorder, so that the bag holds every message and is closed properly.
 
 While the optimizer runs, the recorder and the evaluators are supervised: when one exits,
 core.supervision.Supervisor decides whether it is started again (a restarted recorder continues
@@ -100,6 +100,7 @@ class System:
         self.rig_nodes = []
         self.rig_parameters = {}
         self.optimizer = None
+        self.relay = None
 
     def say(self, text):
         if not self.quiet:
@@ -124,12 +125,15 @@ class System:
             return {SECRET_VARIABLE: self.keys.secret.hex()}
         return {CREDENTIAL_VARIABLE: self.keys.credential(evaluator_id).text()}
 
-    def run(self, evaluators, optimizer_module, optimizer_parameters, rig=''):
+    def run(self, evaluators, optimizer_module, optimizer_parameters, rig='', start_signal=False):
         """
         Run recorder, evaluators and optimizer until the optimizer ends; return its code.
 
         rig: 'hardware' adds a rig evaluator (a rig joins the domain), 'sim' also a simulated
         rig (hand_codesign.ros.sim_rig_node); rig_parameters go to the simulated rig.
+        start_signal: the optimizer takes ros.optimizer_node's parameter start_signal; it then
+        starts beside the others and is told on its standard input when the recorder records.
+        Otherwise it starts once the recorder records.
         """
         self.supervisor = Supervisor(evaluators, start_timeout=self.start_timeout)
         # every process logs into the bag folder from its start; the recorder writes beside
@@ -143,18 +147,29 @@ class System:
         for index in range(evaluators):
             self.start_evaluator(evaluator_role(index))
         self.start_rig(rig)
+        if start_signal:
+            self.start_optimizer(optimizer_module, dict(optimizer_parameters, start_signal=True))
         # the processes above start side by side; the optimizer sends once the recorder records
         self.wait_until_ready(self.recorder, RECORDER_READY, 'the recorder')
         if self.live_view is not None:
             self.announce_live_view()
-        self.optimizer = self.node(optimizer_module, optimizer_parameters, self.key_of(),
-                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        relay = threading.Thread(target=self.relay_optimizer, daemon=True)
-        relay.start()
+        if start_signal:
+            with contextlib.suppress(BrokenPipeError):  # an optimizer that failed: supervise()
+                self.optimizer.stdin.write('the recorder records\n')
+                self.optimizer.stdin.flush()
+        else:
+            self.start_optimizer(optimizer_module, optimizer_parameters)
         code = self.supervise()
-        relay.join(timeout=5.0)
+        self.relay.join(timeout=5.0)
         self.stop_all()
         return code
+
+    def start_optimizer(self, module, parameters):
+        """Start the optimizer, its output relayed to the user."""
+        self.optimizer = self.node(module, parameters, self.key_of(), stdin=subprocess.PIPE,
+                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.relay = threading.Thread(target=self.relay_optimizer, daemon=True)
+        self.relay.start()
 
     def start_evaluator(self, role):
         """Start the process of an evaluator role, under the id the supervisor gives it."""
