@@ -42,7 +42,9 @@ bare ROS 2 process took 0.6 to 1.4 s):
 Measured with the code before these changes (commit c411ce1) and after, interleaved, 12 starts
 each under a load average of 9.6: median 5.97 s before (4.5 bare ROS 2 starts, best 4.64 s),
 3.87 s after (2.9 bare starts, best 1.93 s); in the calmer starts, where a bare ROS 2 process
-took 0.6 to 0.8 s, 4.6 to 6.3 s before and 1.9 to 3.4 s after.
+took 0.6 to 0.8 s, 4.6 to 6.3 s before and 1.9 to 3.4 s after. Six more of each under a
+load average of 4.5: 4.86 s before (5.1 bare starts), 2.64 s after (2.8). This benchmark alone
+under a load average of 3.1: 1.81 s (bare ROS 2 start 0.55 s, ratio 3.3).
 
 Usage: python bench/bench_startup.py [--repeats 5]
 """
