@@ -79,6 +79,12 @@ def test_package_share_holds_manifest_and_configs(workspace):
     assert configs and configs == {p.name for p in (share / 'config' / 'tasks').glob('*.yaml')}
 
 
+def test_the_runs_dds_profile_is_installed_beside_the_runner(workspace):
+    profile = ask(workspace, 'from hand_codesign.ros.discovery import START_PROFILE; '
+                             'print(START_PROFILE.is_file(), START_PROFILE)')
+    assert profile.startswith(f'True {workspace}'), profile
+
+
 def test_messages_import_from_the_install(workspace):
     code = (
         'import hand_codesign_msgs.msg as m\n'

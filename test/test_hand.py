@@ -66,6 +66,11 @@ def test_urdf_parses_with_the_design_joints(tmp_path):
     assert segment.inertial.mass == pytest.approx(1000.0 * math.pi * 0.007 ** 2 * 0.05)
 
 
+@pytest.mark.parametrize('name', ['hand', 'a & b <c>', 'say "hi"', 'it\'s "x"', 'tab\tline\n'])
+def test_a_robot_name_reads_back_as_written(name):
+    assert ElementTree.fromstring(hand_urdf(two_by_three(), HAND, name)).get('name') == name
+
+
 def test_urdf_and_direct_build_give_the_same_hand(client, tmp_path):
     design = two_by_three()
     model = hand_model(design, HAND)

@@ -158,6 +158,20 @@ def test_existing_bag_is_never_overwritten(tmp_path):
             writer.write('/nowhere', b'')
 
 
+def test_bag_directory_may_hold_other_files_but_never_a_bag(tmp_path):
+    bag = tmp_path / 'run'
+    (bag / 'logs').mkdir(parents=True)   # `hand-codesign run` creates it before the recorder
+    (bag / 'logs' / 'evaluator-0.log').write_text('started')
+    write_bag(bag, sample_messages(generations=1))
+    assert sorted(path.name for path in bag.iterdir()) == ['logs', 'metadata.yaml', 'run_0.mcap']
+    with pytest.raises(BagWriteError, match='holds a bag already'):
+        BagWriter(bag)
+    (bag / 'metadata.yaml').unlink()   # a killed recorder leaves its MCAP file without it
+    with pytest.raises(BagWriteError, match='holds a bag already'):
+        BagWriter(bag)
+    assert (bag / 'logs' / 'evaluator-0.log').read_text() == 'started'
+
+
 def test_rejected_evaluation_round_trips_with_empty_arrays(tmp_path):
     messages = sample_messages(generations=1)
     rejected = [m for m in messages[topics.EVALUATIONS] if m.status == m.STATUS_REJECTED]

@@ -106,6 +106,9 @@ def test_bag_holds_every_published_message(one_evaluator_run):
     assert record.message_counts['/candidates'] == published['candidates']
     assert record.message_counts['/generation_summary'] == published['generation_summary']
     assert record.message_counts['/run_info'] == published['run_info'] == 1
+    # the optimizer starts once the recorder records (ros.runner): from the first candidate on
+    first_sends = record.candidates['candidate_id'][record.candidates['attempt'] == 0]
+    assert sorted(first_sends) == list(range(3 * 6))
     # each evaluator counts its answers in its heartbeats (EvaluatorStatus.evaluations_done)
     statuses = record.evaluator_status
     last_count = {}
@@ -191,7 +194,8 @@ def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run
     key_file = tmp_path / 'host-b.key'
     for _ in range(5):   # another run of this host may claim the free domain first
         domain = free_domain()
-        env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
+                   FASTRTPS_DEFAULT_PROFILES_FILE=str(ROOT / 'test' / 'announce_long.xml'))
         # the intruder waits for the run's RunInfo, then forges an answer to every candidate
         intruder = subprocess.Popen([sys.executable, str(ROOT / 'test' / 'intruder.py')],
                                     env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,

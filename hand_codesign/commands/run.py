@@ -59,7 +59,8 @@ def run_command(arguments):
             with termination_as_interrupt():
                 system.rig_parameters = rig_parameters(arguments)
                 code = system.run(arguments.evaluators, OPTIMIZER_MODULE,
-                                  optimizer_parameters(arguments, task, bag), arguments.rig)
+                                  optimizer_parameters(arguments, task, bag), arguments.rig,
+                                  start_signal=True)
         except KeyboardInterrupt:
             say('interrupted: stopping the evaluators and closing the bag')
             system.stop_all()

@@ -6,8 +6,6 @@ overrode (seed, budget, world states). Every process that needs the run's task (
 replay, analysis, resume) rebuilds it with `run_task`, so they all agree on it exactly.
 """
 
-import importlib.metadata
-
 from hand_codesign.core.task import load_task
 from hand_codesign.core.task import parse_task
 
@@ -59,6 +57,8 @@ def with_overrides(task, seed, iterations, population, world_states, structure=N
 
 def library_versions():
     """Return 'name==version' of hand_codesign and the libraries results depend on."""
+    # imported here: it costs a process about 40 ms, and only the optimizer asks
+    import importlib.metadata
     versions = []
     for name in VERSIONED_PACKAGES:
         try:

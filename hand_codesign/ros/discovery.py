@@ -11,6 +11,10 @@ which the runner sets for its processes when the server is on.
 
 The other way without multicast needs no server: ROS_STATIC_PEERS (a ';'-separated list of
 addresses) on both sides, see docs/DISTRIBUTED.md.
+
+Whatever the way, the run's own processes announce themselves for longer at their start than
+Fast DDS does by default (`start_profile`, fastdds_start.xml): they start together, and one that
+missed another's first announcements would find it only at the next, up to 3 s later.
 """
 
 import os
@@ -21,11 +25,19 @@ import sys
 import time
 
 from hand_codesign.errors import UserError
-import psutil
 
 DEFAULT_PORT = 11811
 SERVER_ID = 0
 START_WAIT = 1.0
+START_PROFILE = pathlib.Path(__file__).with_name('fastdds_start.xml')
+PROFILE_VARIABLES = ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE')
+
+
+def start_profile(environment):
+    """Return the variable giving a run's processes fastdds_start.xml, unless a profile is set."""
+    if any(environment.get(name) for name in PROFILE_VARIABLES):
+        return {}   # the user's own Fast DDS profile stands
+    return {PROFILE_VARIABLES[0]: str(START_PROFILE)}
 
 
 def server_executable():
@@ -41,6 +53,7 @@ def server_executable():
 
 def host_addresses():
     """Return this host's IPv4 addresses other than loopback, to tell evaluators elsewhere."""
+    import psutil  # here: every `run` imports this module, few start a server
     addresses = []
     for entries in psutil.net_if_addrs().values():
         addresses += [entry.address for entry in entries

@@ -17,19 +17,18 @@ import time
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.evaluation_jobs import CandidateRejected
 from hand_codesign.core.evaluation_jobs import EvaluatorInbox
-from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import evaluation_message
 from hand_codesign.ros.conversions import rejection_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.keys import evaluator_credential
 from hand_codesign.ros.keys import sign_evaluation
+from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import EvaluatorStatus
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 
@@ -55,8 +54,10 @@ class EvaluatorNode(Node):
                                     credential=self.key)
         self.work = collections.deque()  # candidates taken; the first is being evaluated
         self.done, self.steps_per_second = 0, 0.0
+        # the first heartbeat goes out the moment the subscribers match, not a period later
+        matched = PublisherEventCallbacks(matched=lambda status: self.publish_status())
         self.evaluations, self.status = (self.create_publisher(
-            topics.MESSAGE_TYPES[name], name, topics.QOS[name])
+            topics.MESSAGE_TYPES[name], name, topics.QOS[name], event_callbacks=matched)
             for name in (topics.EVALUATIONS, topics.EVALUATOR_STATUS))
         for name, callback in ((topics.RUN_INFO, self.on_run_info),
                                (topics.CANDIDATES, self.on_candidate)):
@@ -122,28 +123,15 @@ class EvaluatorNode(Node):
             steps_per_second=float(self.steps_per_second), stamp=stamp_now(self)))
 
 
+def farewell(node):
+    # the node's logger would also publish to /rosout, whose context is gone by now
+    rclpy.logging.get_logger('evaluator').info(
+        f'{node.evaluator_id} published {node.done} evaluations')
+
+
 def main(args=None):
-    rclpy.init(args=args)
-    node = None
-    executor = MultiThreadedExecutor(num_threads=2)
-    try:
-        node = EvaluatorNode()
-        executor.add_node(node)
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except (ParameterException, UserError) as error:
-        rclpy.logging.get_logger('evaluator').error(str(error))
-        return 2
-    finally:
-        executor.shutdown()
-        if node is not None:
-            node.destroy_node()
-            # the node's logger would also publish to /rosout, whose context is gone by now
-            rclpy.logging.get_logger('evaluator').info(
-                f'{node.evaluator_id} published {node.done} evaluations')
-        rclpy.try_shutdown()
-    return 0
+    return run_node(EvaluatorNode, 'evaluator', args, farewell=farewell,
+                    executor=lambda: MultiThreadedExecutor(num_threads=2))
 
 
 if __name__ == '__main__':

@@ -210,6 +210,11 @@ def qos_profiles_yaml(profiles):
     return yaml.safe_dump(dicts, sort_keys=False, default_flow_style=False).rstrip('\n')
 
 
+def holds_bag(folder):
+    """Return whether a folder holds the files of a bag (its metadata or an MCAP file)."""
+    return (folder / 'metadata.yaml').exists() or any(folder.glob('*.mcap'))
+
+
 class BagWriter:
     """
     Append serialized messages to a rosbag2-compatible MCAP bag.
@@ -242,7 +247,11 @@ class BagWriter:
                                 f'{sorted(compression_types)}')
         try:
             if self.is_directory:
-                self.bag_path.mkdir(parents=True, exist_ok=file_index > 0)
+                # a folder may exist already (`run` creates it with the run's logs/ first),
+                # but a bag in it is never written over
+                self.bag_path.mkdir(parents=True, exist_ok=True)
+                if file_index == 0 and holds_bag(self.bag_path):
+                    raise FileExistsError(f'{self.bag_path} holds a bag already')
             else:
                 self.file_path.parent.mkdir(parents=True, exist_ok=True)
             self._stream = open(self.file_path, 'xb')

@@ -5,34 +5,63 @@ A user's mistake (a bad parameter, a task the node cannot run) is one error line
 status 2, never a traceback; Ctrl-C and an external shutdown end the node normally (0).
 """
 
+import threading
+
 from hand_codesign.errors import UserError
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 
 
-def run_node(make_node, logger_name, args=None, errors=(), until=None):
+def run_node(make_node, logger_name, args=None, errors=(), until=None, executor=None,
+             farewell=None):
     """
     Spin the node `make_node()` builds until shutdown; return the process's exit status.
 
     errors: more exception types that mean a user's mistake. until: a function of the node
     returning the Future whose completion ends the spin (None: spin until shutdown).
+    executor: a function returning the executor to spin with (None: rclpy's default one).
+    farewell: a function of the node called once it is destroyed, e.g. to log what it did.
     """
     rclpy.init(args=args)
     node = None
+    spinner = executor() if executor is not None else None
     try:
         node = make_node()
         if until is None:
-            rclpy.spin(node)
+            rclpy.spin(node, executor=spinner)
         else:
-            rclpy.spin_until_future_complete(node, until(node))
+            rclpy.spin_until_future_complete(node, until(node), executor=spinner)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ParameterException, UserError, *errors) as error:
         rclpy.logging.get_logger(logger_name).error(str(error))
         return 2
     finally:
+        if spinner is not None:
+            spinner.shutdown()
         if node is not None:
             node.destroy_node()
+            if farewell is not None:
+                farewell(node)
         rclpy.try_shutdown()
     return 0
+
+
+def on_line(stream, node, callback):
+    """
+    Return an Event set once a line arrives on stream (never if it closes first).
+
+    callback then runs in the node's executor: a process that starts the node tells it
+    something this way, e.g. ros.runner that the run's recorder records.
+    """
+    arrived = threading.Event()
+    guard = node.create_guard_condition(callback)
+
+    def wait():
+        if stream.readline():
+            arrived.set()
+            guard.trigger()
+
+    threading.Thread(target=wait, daemon=True).start()
+    return arrived

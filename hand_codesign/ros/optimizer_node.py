@@ -22,10 +22,12 @@ from hand_codesign.ros.conversions import markers_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.conversions import summary_message
 from hand_codesign.ros.keys import OptimizerSigner
+from hand_codesign.ros.node_main import on_line
 from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign.ros.topics import deliver
 from hand_codesign_msgs.msg import RunInfo
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.node import Node
 from rclpy.task import Future
 
@@ -45,6 +47,8 @@ PARAMETERS = {
     'result_file': ('', 'write the final result as JSON here; empty: do not', None),
     'resume_bag': ('', 'continue the interrupted run of this bag (its task, seed and budget; '
                        'task_file and the budget parameters are then ignored)', None),
+    'start_signal': (False, 'send nothing before a line arrives on standard input (the runner '
+                            'sends it once its recorder records)', None),
 }
 
 
@@ -73,8 +77,9 @@ class OptimizerNode(Node):
             task, self.settings['run_id'] or default_run_id(task), self, resumed,
             self.settings['heartbeat_timeout'], self.settings['evaluation_timeout'],
             self.settings['evaluators_expected'], audit_fraction=self.settings['audit_fraction'])
+        matched = PublisherEventCallbacks(matched=self.start_if_ready)
         self.publishers_ = {name: self.create_publisher(
-            topics.RECORDED_MESSAGE_TYPES[name], name, topics.QOS[name])
+            topics.RECORDED_MESSAGE_TYPES[name], name, topics.QOS[name], event_callbacks=matched)
             for name in topics.OPTIMIZER_TOPICS}
         self.published = dict.fromkeys(self.publishers_, 0)
         for name, callback in ((topics.EVALUATIONS, self.on_evaluation),
@@ -85,17 +90,26 @@ class OptimizerNode(Node):
             RunInfo(**self.run.run_info(), stamp=stamp_now(self))))
         self.log(self.run.describe() + self.signer.note)
         self.create_timer(0.2, self.tick)  # messages drive the run; this starts it
+        self.signal = (on_line(sys.stdin, self, self.start_if_ready)
+                       if self.settings['start_signal'] else None)
 
     def publish(self, topic, message):
         self.publishers_[topic].publish(message)
         self.published[topic] += 1
 
     def tick(self):
-        wanted = self.settings['subscribers_expected']
-        self.run.tick(all(p.get_subscription_count() >= wanted for p in self.publishers_.values()))
+        wanted, signal = self.settings['subscribers_expected'], self.signal
+        self.run.tick((signal is None or signal.is_set()) and all(
+            p.get_subscription_count() >= wanted for p in self.publishers_.values()))
+
+    def start_if_ready(self, *event):
+        # the run starts on the heartbeat, match or signal that completes it, not at a tick
+        if self.run.started is None:
+            self.tick()
 
     def on_status(self, message):
         self.run.heard_from(message.evaluator_id, message.capacity, message.run_id)
+        self.start_if_ready()
 
     def on_evaluation(self, message):
         key = message.run_id, message.candidate_id, message.evaluator_id

@@ -10,8 +10,6 @@ import datetime
 import pathlib
 
 from hand_codesign.ros import topics
-from hand_codesign.ros.bag_files import BagRecoveryError
-from hand_codesign.ros.bag_files import continue_bag
 from hand_codesign.ros.mcap_writer import BagWriteError
 from hand_codesign.ros.mcap_writer import BagWriter
 from hand_codesign.ros.mcap_writer import DefinitionError
@@ -22,7 +20,8 @@ from rclpy.qos import QoSProfile
 # name: (default, description, (lowest, highest) or None), for ros.parameters
 PARAMETERS = {
     'bag_path': ('', 'Bag to write: a path ending in .mcap is one MCAP file, any other path a '
-                     'rosbag2 bag directory (with metadata.yaml). Must not exist. Empty: '
+                     'rosbag2 bag directory (with metadata.yaml). Must not hold a bag yet (a '
+                     "folder with other files, e.g. a run's logs/, is fine). Empty: "
                      'hand_codesign_<date>-<time>.mcap in the working directory.', None),
     'topics': (list(topics.RECORDED_MESSAGE_TYPES), 'Relative names of the topics to record; '
                'each must be a topic of the co-design loop or its view '
@@ -81,6 +80,9 @@ def open_bag(settings):
         if not path.is_dir() or path.suffix == '.mcap':
             raise RecorderError(f'parameter continue_bag: bag_path {path} is not an existing '
                                 'bag directory')
+        # imported here: only a restarted recorder reads its bag (mcap's readers, ~50 ms)
+        from hand_codesign.ros.bag_files import BagRecoveryError
+        from hand_codesign.ros.bag_files import continue_bag
         try:
             file_index, recorded, channels = continue_bag(path)
         except BagRecoveryError as error:

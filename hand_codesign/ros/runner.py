@@ -1,7 +1,9 @@
 """
 The processes of a run on an isolated ROS 2 domain (`hand-codesign run`, hand_codesign.commands).
 
-Starts the recorder first and waits until it is ready, then the evaluators and the optimizer;
+Starts the recorder, the evaluators and the optimizer side by side; the optimizer sends nothing
+until the runner tells it that the recorder records (so the bag gets every candidate from the
+first; the evaluators announce themselves only once the optimizer and the recorder are there);
 relays the optimizer's progress; when the optimizer ends (or on Ctrl-C) stops the evaluators,
 then the recorder, so that the bag holds every message and is closed properly.
 
@@ -42,6 +44,7 @@ from hand_codesign.core.supervision import node_name
 from hand_codesign.core.supervision import RECORDER
 from hand_codesign.core.supervision import Supervisor
 from hand_codesign.errors import UserError
+from hand_codesign.ros.discovery import start_profile
 
 DOMAIN_IDS = range(1, 101)
 STOP_TIMEOUT = 30.0
@@ -86,6 +89,7 @@ class System:
                                                          'LOCALHOST'),
             AMENT_PREFIX_PATH=os.environ.get('AMENT_PREFIX_PATH', sys.prefix),
             RCUTILS_CONSOLE_OUTPUT_FORMAT='[{severity}] [{name}]: {message}')
+        self.environment.update(start_profile(self.environment))
         self.discovery = discovery
         if discovery is not None:
             self.environment.update(discovery.environment())
@@ -96,6 +100,7 @@ class System:
         self.rig_nodes = []
         self.rig_parameters = {}
         self.optimizer = None
+        self.relay = None
 
     def say(self, text):
         if not self.quiet:
@@ -120,32 +125,51 @@ class System:
             return {SECRET_VARIABLE: self.keys.secret.hex()}
         return {CREDENTIAL_VARIABLE: self.keys.credential(evaluator_id).text()}
 
-    def run(self, evaluators, optimizer_module, optimizer_parameters, rig=''):
+    def run(self, evaluators, optimizer_module, optimizer_parameters, rig='', start_signal=False):
         """
         Run recorder, evaluators and optimizer until the optimizer ends; return its code.
 
         rig: 'hardware' adds a rig evaluator (a rig joins the domain), 'sim' also a simulated
         rig (hand_codesign.ros.sim_rig_node); rig_parameters go to the simulated rig.
+        start_signal: the optimizer takes ros.optimizer_node's parameter start_signal; it then
+        starts beside the others and is told on its standard input when the recorder records.
+        Otherwise it starts once the recorder records.
         """
         self.supervisor = Supervisor(evaluators, start_timeout=self.start_timeout)
-        self.start_recorder()   # it creates the bag folder; it finds a server started later
+        # every process logs into the bag folder from its start; the recorder writes beside
+        (self.bag / 'logs').mkdir(parents=True, exist_ok=True)
+        self.recorder = self.spawn_recorder()  # it finds a discovery server started later
         if self.live is not None:
-            self.start_live_view()
-        (self.bag / 'logs').mkdir(exist_ok=True)
+            self.live_view = self.spawn_live_view()
         if self.discovery is not None:
             self.discovery.start(self.bag)
             self.say(self.discovery.join_instructions(self.environment['ROS_DOMAIN_ID']))
         for index in range(evaluators):
             self.start_evaluator(evaluator_role(index))
         self.start_rig(rig)
-        self.optimizer = self.node(optimizer_module, optimizer_parameters, self.key_of(),
-                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        relay = threading.Thread(target=self.relay_optimizer, daemon=True)
-        relay.start()
+        if start_signal:
+            self.start_optimizer(optimizer_module, dict(optimizer_parameters, start_signal=True))
+        # the processes above start side by side; the optimizer sends once the recorder records
+        self.wait_until_ready(self.recorder, RECORDER_READY, 'the recorder')
+        if self.live_view is not None:
+            self.announce_live_view()
+        if start_signal:
+            with contextlib.suppress(BrokenPipeError):  # an optimizer that failed: supervise()
+                self.optimizer.stdin.write('the recorder records\n')
+                self.optimizer.stdin.flush()
+        else:
+            self.start_optimizer(optimizer_module, optimizer_parameters)
         code = self.supervise()
-        relay.join(timeout=5.0)
+        self.relay.join(timeout=5.0)
         self.stop_all()
         return code
+
+    def start_optimizer(self, module, parameters):
+        """Start the optimizer, its output relayed to the user."""
+        self.optimizer = self.node(module, parameters, self.key_of(), stdin=subprocess.PIPE,
+                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.relay = threading.Thread(target=self.relay_optimizer, daemon=True)
+        self.relay.start()
 
     def start_evaluator(self, role):
         """Start the process of an evaluator role, under the id the supervisor gives it."""
@@ -175,16 +199,23 @@ class System:
 
     def start_recorder(self):
         """Start the recorder and wait until it records; a restart continues the same bag."""
-        restart = self.supervisor.started(RECORDER) != RECORDER
-        parameters = {'bag_path': self.bag, 'continue_bag': restart}
-        self.recorder = self.node('hand_codesign.ros.recorder_node', parameters,
-                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.recorder = self.spawn_recorder()
         self.wait_until_ready(self.recorder, RECORDER_READY, 'the recorder')
 
-    def start_live_view(self):
+    def spawn_recorder(self):
+        """Return a new recorder process; a restarted one continues the same bag."""
+        restart = self.supervisor.started(RECORDER) != RECORDER
+        parameters = {'bag_path': self.bag, 'continue_bag': restart}
+        return self.node('hand_codesign.ros.recorder_node', parameters,
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+    def spawn_live_view(self):
         host, port = self.live
-        self.live_view = self.node('hand_codesign.ros.live_node', {'host': host, 'port': port},
-                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        return self.node('hand_codesign.ros.live_node', {'host': host, 'port': port},
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+    def announce_live_view(self):
+        """Wait until the live view serves, then tell the user where."""
         line = self.wait_until_ready(self.live_view, LIVE_READY, 'the live view')
         address = line.split(LIVE_READY + ': ', 1)[-1].split()[0]
         self.say(f'live: {address} (in Foxglove: Open connection, Foxglove WebSocket; layout '
