@@ -394,8 +394,10 @@ def write_results(out, experiment, budget, seeds):
              f'Budget {budget.describe()}; seeds 1 to {seeds}; a row per configuration, '
              'the unseen worlds of its seeds pooled.', '',
              markdown_table(rows, experiment.tolerance)]
-    groups = [(f'{row["policy"]} {row["algorithm"]} {row["world_states"]}w',
-               measured[row['configuration']]) for row in rows]
+    labels = [f'{row["policy"]} {row["algorithm"]} {row["world_states"]}w' for row in rows]
+    if len(set(labels)) < len(labels):  # levers that differ by a task option, not algorithm
+        labels = [row['configuration'] for row in rows]
+    groups = [(label, measured[row['configuration']]) for label, row in zip(labels, rows)]
     if groups:
         plot_errors(paths[2], groups, experiment.tolerance, f'{name}, {budget.name} budget')
         lines += [f'![{paths[2].name}]({paths[2].name})', '']
