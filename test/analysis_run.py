@@ -80,6 +80,23 @@ def decoded_messages(mcap_path, topic):
                 if channel.topic.lstrip('/') == topic]
 
 
+def until_evaluation_of(candidate_id):
+    """
+    Return a copy_bag `keep` that ends the bag after the evaluation of `candidate_id`.
+
+    As a run interrupted there leaves it: everything before, nothing after.
+    """
+    state = {'cut': False}
+
+    def keep(topic, log_time, message):
+        if state['cut']:
+            return False
+        if topic == topics.EVALUATIONS and message.candidate_id >= candidate_id:
+            state['cut'] = True
+        return True
+    return keep
+
+
 def copy_bag(source_mcap, destination, keep=None, edit=None):
     """
     Write a copy of a bag file to destination (.mcap) with BagWriter, as the recorder would.

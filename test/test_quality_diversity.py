@@ -10,6 +10,7 @@ import sys
 
 from analysis_run import copy_bag
 from analysis_run import run_cli
+from analysis_run import until_evaluation_of
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.cli import main
 from hand_codesign.core import load_task
@@ -19,11 +20,11 @@ from hand_codesign.core.optimizers import (AskTellOptimizer, Candidate, make_opt
                                            OptimizerError, replay)
 from hand_codesign.core.quality_diversity import CmaMae, CmaMe
 from hand_codesign.core.task_spec import DESCRIPTOR_NAMES
-from hand_codesign.ros import topics
 import numpy as np
 import pytest
+from task_files import optimizer_document, write_task as write_task_file
 from test_optimizers import run, same_candidates
-from test_system import finish, start_run, summaries
+from test_system import assert_same_with_two_evaluators, finish, start_run
 import yaml
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -141,17 +142,11 @@ def test_replay_rebuilds_the_archive_and_the_pending_generation(algorithm):
 
 
 def task_document(algorithm='cma-mae', archive=None):
-    document = yaml.safe_load(TASK5.read_text())
-    document['optimizer']['algorithm'] = algorithm
-    if archive is not None:
-        document['optimizer']['archive'] = archive
-    return document
+    return optimizer_document(algorithm, archive=archive)
 
 
 def write_task(folder, document, name='qd.yaml'):
-    path = folder / name
-    path.write_text(yaml.safe_dump(document, sort_keys=False))
-    return path
+    return write_task_file(folder, document, name)
 
 
 def test_descriptors_of_task5_designs_and_their_default_ranges():
@@ -277,10 +272,7 @@ def test_a_real_cma_mae_run_reports_the_archives_recommended_design(mae_run):
 
 def test_a_real_cma_mae_run_is_the_same_with_two_evaluators(mae_run, tmp_path):
     task, bag, _ = mae_run
-    two = tmp_path / 'two'
-    finish(start_run(two, 2, budget=BUDGET, task=task))
-    assert summaries(two) == summaries(bag)
-    assert len(set(read_run(two).evaluations['evaluator_id'])) >= 2
+    assert_same_with_two_evaluators(bag, task, tmp_path, BUDGET)
 
 
 def test_analyze_draws_the_archive_and_lists_its_best_designs(mae_run, tmp_path, capsys):
@@ -313,16 +305,9 @@ def test_analyze_draws_the_archive_and_lists_its_best_designs(mae_run, tmp_path,
 def test_an_interrupted_cma_mae_run_resumes_to_the_same_result(mae_run, tmp_path):
     _, bag, _ = mae_run
     mcap, = sorted(bag.glob('*.mcap'))
-    state = {'cut': False}
-
-    def keep(topic, log_time, message):  # the bag ends within generation 2
-        if state['cut']:
-            return False
-        if topic == topics.EVALUATIONS and message.candidate_id >= 18:
-            state['cut'] = True
-        return True
-
-    interrupted = copy_bag(mcap, tmp_path / 'interrupted.mcap', keep=keep)
+    # the bag ends within generation 2
+    interrupted = copy_bag(mcap, tmp_path / 'interrupted.mcap',
+                           keep=until_evaluation_of(18))
     resumed = tmp_path / 'resumed'
     finished = run_cli('run', '--resume', interrupted, '--evaluators', '2', '--bag', resumed)
     assert finished.returncode == 0, finished.stdout + finished.stderr

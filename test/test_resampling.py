@@ -7,6 +7,7 @@ import sys
 
 from analysis_run import copy_bag
 from analysis_run import run_cli
+from analysis_run import until_evaluation_of
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.records import best_candidate_id
 from hand_codesign.analysis.records import design_task
@@ -21,7 +22,6 @@ from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.search import Search
 from hand_codesign.core.worlds import world_states
 from hand_codesign.errors import UserError
-from hand_codesign.ros import topics
 import numpy as np
 import pytest
 import yaml
@@ -220,16 +220,9 @@ def test_the_reported_design_is_the_final_checks_best_on_the_fixed_worlds(runs, 
 def test_a_resampled_run_resumed_in_its_final_check_reports_the_same_design(runs, tmp_path):
     bag = runs[0] / 'evaluators2'
     mcap, = sorted(bag.glob('*.mcap'))
-    state = {'cut': False}
-
-    def keep(topic, log_time, message):  # the bag ends at the first answer of the check
-        if state['cut']:
-            return False
-        if topic == topics.EVALUATIONS and message.candidate_id >= 12:
-            state['cut'] = True
-        return True
-
-    interrupted = copy_bag(mcap, tmp_path / 'interrupted.mcap', keep=keep)
+    # the bag ends at the first answer of the check
+    interrupted = copy_bag(mcap, tmp_path / 'interrupted.mcap',
+                           keep=until_evaluation_of(12))
     point = resume_point(interrupted)
     assert point.search.checking and len(point.known) == 1 and len(point.to_evaluate) == 1
     resumed = tmp_path / 'resumed'

@@ -18,9 +18,9 @@ from hand_codesign.core.resume import rebuild_search
 from hand_codesign.core.search import Search
 import numpy as np
 import pytest
+from task_files import optimizer_document, write_task as write_task_file
 from test_optimizers import run, same_candidates
-from test_system import finish, start_run, summaries
-import yaml
+from test_system import assert_same_with_two_evaluators, finish, start_run
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK5 = ROOT / 'config' / 'tasks' / 'task5.yaml'
@@ -198,17 +198,11 @@ def test_replay_rebuilds_a_run_across_its_restarts(algorithm):
 
 
 def task_document(algorithm='ipop-cma', stagnation=1):
-    document = yaml.safe_load(TASK5.read_text())
-    document['optimizer']['algorithm'] = algorithm
-    if stagnation is not None:
-        document['optimizer']['restart_stagnation'] = stagnation
-    return document
+    return optimizer_document(algorithm, restart_stagnation=stagnation)
 
 
 def write_task(tmp_path, document, name='restarting.yaml'):
-    path = tmp_path / name
-    path.write_text(yaml.safe_dump(document, sort_keys=False))
-    return path
+    return write_task_file(tmp_path, document, name)
 
 
 def test_tasks_select_the_restart_algorithms(tmp_path):
@@ -297,10 +291,7 @@ def test_a_real_ipop_run_restarts_and_spends_its_budget(ipop_run, tmp_path, caps
 
 def test_a_real_ipop_run_is_the_same_with_two_evaluators(ipop_run, tmp_path):
     task, bag, _ = ipop_run
-    two = tmp_path / 'two'
-    finish(start_run(two, 2, budget=BUDGET, task=task))
-    assert summaries(two) == summaries(bag)
-    assert len(set(read_run(two).evaluations['evaluator_id'])) >= 2
+    assert_same_with_two_evaluators(bag, task, tmp_path, BUDGET)
 
 
 def test_the_best_design_of_a_real_ipop_run_replays_bit_identically(ipop_run, capsys):

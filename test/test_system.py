@@ -68,6 +68,14 @@ def summaries(bag):
             for row in range(len(table))]
 
 
+def assert_same_with_two_evaluators(bag, task, folder, budget):
+    """Run `task` again with 2 evaluators: the same generations as `bag`, both evaluators used."""
+    two = folder / 'two'
+    finish(start_run(two, 2, budget=budget, task=task))
+    assert summaries(two) == summaries(bag)
+    assert len(set(read_run(two).evaluations['evaluator_id'])) >= 2
+
+
 @pytest.fixture(scope='module')
 def one_evaluator_run(tmp_path_factory):
     bag = tmp_path_factory.mktemp('runs') / 'one'
