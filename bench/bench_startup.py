@@ -34,10 +34,11 @@ bare ROS 2 process took 0.6 to 1.4 s):
 - polling: an evaluator announced itself at its next heartbeat (0.5 s period) after its
   subscribers matched, and the optimizer started at its next tick (0.2 s) after that; both now
   act on the event itself (a publisher's matched event, the heartbeat's arrival);
-- imports the start did not need: xml.sax.saxutils (which imports urllib and http.client) for
-  URDF attributes, importlib.metadata, psutil, mcap's readers: an evaluator now imports in
-  0.31 s of CPU instead of 0.42 s, the recorder in 0.25 s instead of 0.31 s. The optimizer
-  still imports DEAP (and through it moocore, urllib) also when it runs pycma's CMA-ES.
+- imports the start did not need: importlib.metadata, psutil, mcap's readers: an evaluator
+  imported in 0.31 s of CPU instead of 0.42 s, the recorder in 0.25 s instead of 0.31 s.
+  xml.sax.saxutils (URDF attributes; it imports urllib and http.client) is kept: about 20 ms
+  once per process, not worth writing XML quoting again. The optimizer still imports DEAP
+  (and through it moocore, urllib) also when it runs pycma's CMA-ES.
 
 Measured with the code before these changes (commit c411ce1) and after, interleaved, 12 starts
 each under a load average of 9.6: median 5.97 s before (4.5 bare ROS 2 starts, best 4.64 s),

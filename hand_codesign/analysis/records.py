@@ -454,43 +454,20 @@ def structure_bests(record):
             for outcome in search.outcomes]
 
 
-def restarts_of(record):
+def replayed_optimizer(record, algorithms, single=False):
     """
-    Return the core.restarts Restart records of a run of ipop-cma or bipop-cma, else [].
+    Return the optimizer of a run of one of `algorithms`, replayed from its bag, else None.
 
-    The bag holds no restart field: the search is replayed from the told objectives (it is
-    deterministic), which gives every CMA-ES instance: the generation it started at, its
-    population, step size, regime and why the one before it ended. Only for a run of one
-    optimization: a hierarchy's or a two-stage task's optimizers count generations each from 0.
-    """
-    try:
-        task = run_task_of(record)
-    except UserError:
-        return []
-    if task.algorithm not in RESTART_ALGORITHMS or task.hierarchy is not None or task.two_stage:
-        return []
-    search = Search(task)
-    try:
-        replay(search, told_objectives(record))
-    except OptimizerError:
-        return []
-    return list(search.optimizer.restarts)
-
-
-def archive_of(record):
-    """
-    Return the core.quality_diversity optimizer of a cma-mae or cma-me run, else None.
-
-    The bag holds the evaluations, not the archive: the search is replayed from the told
-    objectives (it is deterministic, and the descriptors are computed from the genomes), which
-    rebuilds the archive exactly as the run had it, elites, candidate ids and all. A hierarchy
-    or a two-stage run gives the archive of its last optimization.
+    The bag holds the evaluations, not the optimizer's state: the search is replayed from the
+    told objectives (it is deterministic), which rebuilds it exactly as the run had it. A
+    hierarchy or two-stage run gives its last optimization's, or None if `single`.
     """
     try:
         task = run_task_of(record)
     except UserError:
         return None
-    if task.algorithm not in QD_ALGORITHMS:
+    if task.algorithm not in algorithms or (
+            single and (task.hierarchy is not None or task.two_stage)):
         return None
     search = Search(task)
     try:
@@ -498,6 +475,28 @@ def archive_of(record):
     except OptimizerError:
         return None
     return search.optimizer
+
+
+def restarts_of(record):
+    """
+    Return the core.restarts Restart records of a run of ipop-cma or bipop-cma, else [].
+
+    Replayed (replayed_optimizer): every CMA-ES instance, the generation it started at, its
+    population, step size, regime and why the one before it ended. Only for a run of one
+    optimization: a hierarchy's or a two-stage task's optimizers count generations each from 0.
+    """
+    optimizer = replayed_optimizer(record, RESTART_ALGORITHMS, single=True)
+    return [] if optimizer is None else list(optimizer.restarts)
+
+
+def archive_of(record):
+    """
+    Return the core.quality_diversity optimizer of a cma-mae or cma-me run, else None.
+
+    Replayed (replayed_optimizer): the descriptors are computed from the genomes, so the
+    archive comes back exactly as the run had it, elites, candidate ids and all.
+    """
+    return replayed_optimizer(record, QD_ALGORITHMS)
 
 
 def ranked_candidate_id(record, generation=None, rank=0):

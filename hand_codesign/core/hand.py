@@ -20,6 +20,7 @@ the link before it. Inertia is that of a solid cylinder of the segment's length.
 from dataclasses import dataclass
 import math
 from typing import Optional, Tuple
+from xml.sax.saxutils import quoteattr
 
 from hand_codesign.core.design import HandDesign
 from hand_codesign.core.task import HandSpec
@@ -27,27 +28,6 @@ from hand_codesign.core.task import HandSpec
 # Rotates a capsule's own axis (z in Bullet and URDF) onto the segment's +y.
 _CAPSULE_ORIENTATION = (-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))
 _CAPSULE_RPY = (-math.pi / 2, 0.0, 0.0)
-
-
-# What an XML attribute value escapes, '&' first.
-_ATTRIBUTE_ESCAPES = (('&', '&amp;'), ('<', '&lt;'), ('>', '&gt;'), ('\n', '&#10;'),
-                      ('\r', '&#13;'), ('\t', '&#9;'))
-
-
-def _attribute(text):
-    """
-    Return text as a quoted XML attribute value, as xml.sax.saxutils.quoteattr writes it.
-
-    Written here because importing xml.sax.saxutils imports urllib and http.client, a
-    noticeable part of the start of an evaluator or optimizer process that never uses them.
-    """
-    for raw, entity in _ATTRIBUTE_ESCAPES:
-        text = text.replace(raw, entity)
-    if '"' not in text:
-        return f'"{text}"'
-    if "'" not in text:
-        return f"'{text}'"
-    return '"' + text.replace('"', '&quot;') + '"'
 
 
 # The URDF effort limit; the simulated torques are whatever the policy asks for.
@@ -198,13 +178,13 @@ def _segment_xml(model, link, capsules):
     else:
         joint_type = 'revolute'
         limit = f' lower="{link.lower_limit!r}" upper="{link.upper_limit!r}"'
-    return (f'  <link name={_attribute(link.name)}>\n' + _contact_xml(model.friction)
+    return (f'  <link name={quoteattr(link.name)}>\n' + _contact_xml(model.friction)
             + _inertial_xml(link.mass, link.centre, link.inertia)
             + _capsule_xml(link, 'visual', capsules)
             + _capsule_xml(link, 'collision', capsules) + '  </link>\n'
-            + f'  <joint name={_attribute(link.joint_name)} type="{joint_type}">\n'
-            + f'    <parent link={_attribute(parent)}/>\n'
-            + f'    <child link={_attribute(link.name)}/>\n'
+            + f'  <joint name={quoteattr(link.joint_name)} type="{joint_type}">\n'
+            + f'    <parent link={quoteattr(parent)}/>\n'
+            + f'    <child link={quoteattr(link.name)}/>\n'
             + f'    <origin xyz="{_vector(link.joint_position)}" rpy="0 0 0"/>\n'
             + f'    <axis xyz="{_vector(link.joint_axis)}"/>\n'
             + f'    <limit effort="{model.max_joint_force!r}" velocity="100.0"{limit}/>\n'
@@ -219,7 +199,7 @@ def model_urdf(model: HandModel, name='hand', capsules=True):
     simulated hand); capsules=False writes each as a cylinder between two spheres, the same
     solid in the shapes of the URDF specification, for parsers that know only those.
     """
-    parts = ['<?xml version="1.0"?>\n', f'<robot name={_attribute(name)}>\n', _palm_xml(model)]
+    parts = ['<?xml version="1.0"?>\n', f'<robot name={quoteattr(name)}>\n', _palm_xml(model)]
     parts.extend(_segment_xml(model, link, capsules) for link in model.links)
     parts.append('</robot>\n')
     return ''.join(parts)
