@@ -108,10 +108,15 @@ class _TaskContext:
         return entry
 
 
-def evaluate(x, task, worlds: Optional[Sequence] = None) -> 'Evaluation':
-    """Return the Evaluation of normalized genome x on `task` (default worlds: the task's)."""
+def evaluate(x, task, worlds: Optional[Sequence] = None, on_world=None) -> 'Evaluation':
+    """
+    Return the Evaluation of normalized genome x on `task` (default worlds: the task's).
+
+    `on_world(index, simulator)`, if given, is called before each world's rollout: a caller
+    that must stay responsive (an evaluator's heartbeats) does its chores there.
+    """
     design = _TaskContext.of(task).genome_spec().decode(np.asarray(x, dtype=float))
-    return evaluate_design(design, task, worlds)
+    return evaluate_design(design, task, worlds, on_world=on_world)
 
 
 def evaluate_design(design, task, worlds: Optional[Sequence] = None,

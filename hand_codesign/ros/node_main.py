@@ -11,10 +11,11 @@ from hand_codesign.errors import UserError
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
+from rclpy.executors import SingleThreadedExecutor
 
 
 def run_node(make_node, logger_name, args=None, errors=(), until=None, executor=None,
-             farewell=None):
+             farewell=None, spin=None):
     """
     Spin the node `make_node()` builds until shutdown; return the process's exit status.
 
@@ -22,13 +23,19 @@ def run_node(make_node, logger_name, args=None, errors=(), until=None, executor=
     returning the Future whose completion ends the spin (None: spin until shutdown).
     executor: a function returning the executor to spin with (None: rclpy's default one).
     farewell: a function of the node called once it is destroyed, e.g. to log what it did.
+    spin: a function of (node, executor) that spins the node its own way instead of
+    rclpy.spin (the executor is rclpy's SingleThreadedExecutor unless `executor` says).
     """
     rclpy.init(args=args)
     node = None
     spinner = executor() if executor is not None else None
     try:
         node = make_node()
-        if until is None:
+        if spin is not None:
+            spinner = spinner or SingleThreadedExecutor()
+            spinner.add_node(node)
+            spin(node, spinner)
+        elif until is None:
             rclpy.spin(node, executor=spinner)
         else:
             rclpy.spin_until_future_complete(node, until(node), executor=spinner)
