@@ -13,7 +13,7 @@ from test_controller import RUN
 from test_controller import task5
 
 
-def run_with(evaluators, lies, audit_fraction=0.1, population=6):
+def run_with(evaluators, lies, audit_fraction=0.1, population=6, own=()):
     """
     Run Task 5 to the end; lies(evaluator, candidate_id) says whether an answer is wrong.
 
@@ -24,7 +24,7 @@ def run_with(evaluators, lies, audit_fraction=0.1, population=6):
     outbox = Outbox()
     controller = RunController(task, RUN, outbox, clock=clock,
                                evaluators_expected=len(evaluators),
-                               audit_fraction=audit_fraction)
+                               audit_fraction=audit_fraction, own_evaluators=own)
     for evaluator in evaluators:
         controller.heard_from(evaluator, 2)
     controller.tick()
@@ -112,6 +112,28 @@ def test_after_its_probation_a_lie_is_caught_only_when_its_candidate_is_drawn():
     missed, _, _, told = run_with(('a', 'b', 'liar'), undrawn_lies, fraction, population=10)
     _, _, _, honest = run_with(('a', 'b'), lambda *_: False, fraction, population=10)
     assert missed['trust']['quarantined'] == [] and not np.array_equal(told, honest)
+
+
+def test_the_runs_own_evaluators_are_audited_on_probation_only():
+    own = ('evaluator-0', 'evaluator-1')
+    result, _, _, told = run_with(('evaluator-0', 'evaluator-1-r2'), lambda *_: False, 0.5,
+                                  population=10, own=own)
+    assert result['trust']['audit_evaluations'] == 2   # one probation each, nothing drawn
+    _, _, _, honest = run_with(('a', 'b'), lambda *_: False, 0.5, population=10)
+    assert np.array_equal(told, honest)
+
+
+def test_an_evaluator_on_another_host_is_still_drawn_beside_the_runs_own():
+    seed, fraction, later = task5().seed, 0.3, 12
+
+    def drawn_lies(evaluator, candidate_id):
+        return (evaluator == 'host-b' and candidate_id >= later
+                and drawn(seed, candidate_id, fraction))
+
+    caught, _, _, _ = run_with(('evaluator-0', 'evaluator-1', 'host-b'), drawn_lies, fraction,
+                               population=10, own=('evaluator-0', 'evaluator-1'))
+    assert caught['trust']['quarantined'] == ['host-b']
+    assert caught['fitness'] == truth(population=10).fitness
 
 
 def test_the_draws_come_from_the_seed_and_have_the_fraction():

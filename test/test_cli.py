@@ -78,6 +78,9 @@ def test_key_files_go_outside_the_bag_and_never_over_another_file(capsys, tmp_pa
     assert code == 2 and 'old.key already exists' in err
     code, _, err = run(capsys, 'run', '--task', TASK, '--bag', bag, '--write-key-file', 'x')
     assert code == 2 and '--write-key-file x: expected ID=PATH' in err
+    code, _, err = run(capsys, 'run', '--task', TASK, '--bag', bag, '--evaluators', '2',
+                       '--write-key-file', f'evaluator-1-r1={tmp_path / "b.key"}')
+    assert code == 2 and "evaluator-1-r1 is the name of one of this run's own" in err
     code, _, err = run(capsys, 'run', '--task', TASK, '--bag', bag, '--audit-fraction', '2')
     assert code == 2 and '--audit-fraction: expected a share from 0 to 1, got 2.0' in err
     assert not bag.exists()

@@ -18,6 +18,8 @@ import time
 from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.signing import new_secret
 from hand_codesign.core.signing import RunKeys
+from hand_codesign.core.supervision import evaluator_role
+from hand_codesign.core.supervision import serves_role
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 from hand_codesign.ros.discovery import DiscoveryServer
@@ -39,7 +41,7 @@ def run_command(arguments):
     if bag.suffix == '.mcap':
         raise UserError(f'--bag {bag}: give a folder (the run writes its bag, result.json and '
                         'logs there), not a .mcap file')
-    key_files = key_file_requests(arguments.write_key_file, bag)
+    key_files = key_file_requests(arguments.write_key_file, bag, own_roles(arguments))
     keys = RunKeys(new_secret())
     discovery = (DiscoveryServer(arguments.discovery_server)
                  if arguments.discovery_server is not None else None)
@@ -83,14 +85,21 @@ def start_timeout(arguments):
     return DEFAULT_START_TIMEOUT if arguments.evaluators > 0 else 0.0
 
 
-def key_file_requests(requests, bag):
-    """Return [(evaluator id, path)] of --write-key-file ID=PATH; UserError if unusable."""
+def key_file_requests(requests, bag, own=()):
+    """
+    Return [(evaluator id, path)] of --write-key-file ID=PATH; UserError if unusable.
+
+    own: the roles of the run's own evaluators, whose names another host may not take.
+    """
     chosen = []
     for request in requests:
         evaluator_id, _, path = request.partition('=')
         if not evaluator_id or not path:
             raise UserError(f'--write-key-file {request}: expected ID=PATH, e.g. '
                             'host-b=/home/me/host-b.key')
+        if serves_role(evaluator_id, own):
+            raise UserError(f'--write-key-file {request}: {evaluator_id} is the name of one of '
+                            "this run's own evaluators; choose another id for the other host")
         path = pathlib.Path(path).resolve()
         if path == bag or bag in path.parents:
             raise UserError(f'--write-key-file {request}: {path} is inside the bag folder, '
@@ -109,12 +118,18 @@ def write_key_file(path, text):
         stream.write(text + '\n')
 
 
+def own_roles(arguments):
+    """Return the roles of the evaluators this run starts itself (core.supervision)."""
+    return [evaluator_role(index) for index in range(arguments.evaluators)]
+
+
 def optimizer_parameters(arguments, task, bag):
     """Return the optimizer node's parameters for this run."""
     parameters = {
         'evaluators_expected': max(1, arguments.evaluators + bool(arguments.rig)),
         'subscribers_expected': 1,
-        'result_file': bag / 'result.json'}
+        'result_file': bag / 'result.json',
+        'own_evaluators': ','.join(own_roles(arguments))}
     if getattr(arguments, 'audit_fraction', None) is not None:
         parameters['audit_fraction'] = arguments.audit_fraction
     if arguments.resume:

@@ -6,9 +6,13 @@ evaluators return the same objectives bit for bit; a signature proves who answer
 whether the answer is right. Rules (the RunController applies them to each answer):
 
 - an answer is audited when its candidate is drawn (probability `fraction`, a draw of the
-  run's seed and the candidate id, so the same candidates are drawn in every run of a seed),
-  or when it is the first answer of an evaluator that has not yet passed an audit in this
-  run (probation). Its further answers are held, untold, until that audit is settled: taken
+  run's seed and the candidate id, so the same candidates are drawn in every run of a seed)
+  and its evaluator is not one of the run's own, or when it is the first answer of an
+  evaluator that has not yet passed an audit in this run (probation). The run's own
+  evaluators (`own`: the roles `hand-codesign run` started on the optimizer's host, with keys
+  it never wrote to a file) are the same code on the same machine as the optimizer: a drawn
+  audit of theirs would cost a tenth of the run and catch nothing the probation does not (a
+  different build, a non-deterministic set-up), so only their probation is audited. Its further answers are held, untold, until that audit is settled: taken
   if it passed, evaluated again by others if it failed. So an evaluator that lies on every
   evaluation is caught on its first answer, before any of its answers is told, and the
   result equals that of a run without it, for one extra evaluation per honest evaluator;
@@ -30,6 +34,7 @@ caught with probability `fraction`, so one that lies k times goes unnoticed with
 
 import collections
 
+from hand_codesign.core.supervision import serves_role
 import numpy as np
 
 DEFAULT_FRACTION = 0.1
@@ -57,9 +62,10 @@ class Verdict:
 class Audits:
     """The audit state of a run (see the module doc)."""
 
-    def __init__(self, seed, fraction=DEFAULT_FRACTION):
+    def __init__(self, seed, fraction=DEFAULT_FRACTION, own=()):
         self.seed = seed
         self.fraction = fraction
+        self.own = frozenset(own)  # roles of the run's own evaluators (core.supervision)
         self.passed = set()        # evaluators that agreed with another in an audit
         self.quarantined = []      # in the order they were caught
         self.audit_evaluations = 0
@@ -97,8 +103,8 @@ class Audits:
             return self._compare(candidate_id, answers)
         on_probation = self.fraction > 0 and evaluator_id not in self.passed and others_alive
         first_on_probation = on_probation and evaluator_id not in self._probation
-        if first_on_probation or (others_alive and drawn(self.seed, candidate_id,
-                                                         self.fraction)):
+        if first_on_probation or (others_alive and not serves_role(evaluator_id, self.own)
+                                  and drawn(self.seed, candidate_id, self.fraction)):
             if first_on_probation:
                 self._probation[evaluator_id] = candidate_id
             self.audited.add(candidate_id)

@@ -65,7 +65,7 @@ class RunController:
 
     def __init__(self, task, run_id, outbox, resumed=None, heartbeat_timeout=5.0,
                  evaluation_timeout=0.0, evaluators_expected=1, clock=time.monotonic,
-                 audit_fraction=DEFAULT_FRACTION):
+                 audit_fraction=DEFAULT_FRACTION, own_evaluators=()):
         self.task = task
         self.run_id = run_id
         self.outbox = outbox
@@ -77,7 +77,7 @@ class RunController:
         self.dispatcher = Dispatcher(heartbeat_timeout,
                                      evaluation_timeout or FIRST_EVALUATION_TIMEOUT,
                                      MAX_ATTEMPTS)
-        self.audits = Audits(task.seed, audit_fraction)
+        self.audits = Audits(task.seed, audit_fraction, own_evaluators)
         self.rejected_evaluations = 0  # Evaluations whose signature failed
         self.attempts = {}             # candidate id -> dispatches so far
         self.adaptive_timeout = evaluation_timeout <= 0

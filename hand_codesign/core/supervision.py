@@ -37,6 +37,12 @@ def evaluator_role(index):
     return f'evaluator-{index}'
 
 
+def serves_role(evaluator_id, roles):
+    """Return whether an evaluator id is that of one of `roles`, started or restarted."""
+    role, restart, count = evaluator_id.rpartition('-r')
+    return evaluator_id in roles or (bool(restart) and count.isdigit() and role in roles)
+
+
 @dataclasses.dataclass
 class Role:
     """One process the run keeps alive: its exits and its next start."""

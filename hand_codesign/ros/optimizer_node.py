@@ -44,6 +44,8 @@ PARAMETERS = {
     'heartbeat_timeout': (5.0, 's of evaluator silence before its candidates move', (0.1, 3600.0)),
     'evaluation_timeout': (0.0, 's before a candidate is sent again; 0: adaptive', (0.0, 86400.0)),
     'audit_fraction': (DEFAULT_FRACTION, 'share of answers audited (core.audits)', (0.0, 1.0)),
+    'own_evaluators': ('', 'comma-separated roles of the evaluators the runner started: '
+                           'audited on probation only (core.audits)', None),
     'result_file': ('', 'write the final result as JSON here; empty: do not', None),
     'resume_bag': ('', 'continue the interrupted run of this bag (its task, seed and budget; '
                        'task_file and the budget parameters are then ignored)', None),
@@ -76,7 +78,8 @@ class OptimizerNode(Node):
         self.run = RunController(
             task, self.settings['run_id'] or default_run_id(task), self, resumed,
             self.settings['heartbeat_timeout'], self.settings['evaluation_timeout'],
-            self.settings['evaluators_expected'], audit_fraction=self.settings['audit_fraction'])
+            self.settings['evaluators_expected'], audit_fraction=self.settings['audit_fraction'],
+            own_evaluators=[role for role in self.settings['own_evaluators'].split(',') if role])
         matched = PublisherEventCallbacks(matched=self.start_if_ready)
         self.publishers_ = {name: self.create_publisher(
             topics.RECORDED_MESSAGE_TYPES[name], name, topics.QOS[name], event_callbacks=matched)
