@@ -15,6 +15,8 @@ a Task 5 run evaluated (a sample of its simulated candidates: later generations 
 more and step slower than the first).
 
 Usage: python bench/bench_pybullet_build.py [--candidates 12] [--rounds 3] [--bag BAG]
+                                           [--built FOLDER]
+(--built: compare the module in FOLDER, another build, instead of the installed one)
 """
 
 import argparse
@@ -103,6 +105,7 @@ def main():
     parser.add_argument('--rounds', type=int, default=3, help='rounds per candidate, per turn')
     parser.add_argument('--turns', type=int, default=2, help='alternate processes per module')
     parser.add_argument('--bag', help='take the candidates from this Task 5 run')
+    parser.add_argument('--built', help='folder of another built module to compare')
     parser.add_argument('--worker', help=argparse.SUPPRESS)
     arguments = parser.parse_args()
     if arguments.worker:
@@ -120,7 +123,7 @@ def main():
         runs = {'wheel': [], 'built': []}
         for _ in range(arguments.turns):
             runs['wheel'].append(measure(wheel.parent, genomes_file, arguments.rounds))
-            runs['built'].append(measure(None, genomes_file, arguments.rounds))
+            runs['built'].append(measure(arguments.built, genomes_file, arguments.rounds))
     best = {name: {key: min(run[key] for run in turns) for key in ('bare', 'evaluate')}
             for name, turns in runs.items()}
     steps = runs['wheel'][0]['steps']

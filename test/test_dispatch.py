@@ -23,7 +23,7 @@ def sent_ids(sent):
 
 
 def test_capacity_is_respected_and_load_balanced():
-    dispatcher = make_dispatcher()
+    dispatcher = make_dispatcher(10)
     dispatcher.heard_from('a', 2, now=0.0)
     dispatcher.heard_from('b', 2, now=0.0)
     sent = sent_ids(dispatcher.assignments(now=0.0))
@@ -31,7 +31,26 @@ def test_capacity_is_respected_and_load_balanced():
     assert sorted(evaluator for _, evaluator, _ in sent) == ['a', 'a', 'b', 'b']
     assert dispatcher.assignments(now=0.1) == []
     assert dispatcher.complete(sent[0][0])
-    assert [item for item, _, _ in sent_ids(dispatcher.assignments(now=0.2))] == [4]
+    assert sent_ids(dispatcher.assignments(now=0.2)) == [(4, sent[0][1], 0)]
+
+
+def test_the_last_candidates_go_to_evaluators_with_nothing_queued():
+    dispatcher = make_dispatcher(5)
+    dispatcher.heard_from('a', 2, now=0.0)
+    dispatcher.heard_from('b', 2, now=0.0)
+    assert sent_ids(dispatcher.assignments(now=0.0)) == [(0, 'a', 0), (1, 'b', 0), (2, 'a', 0)]
+    assert dispatcher.complete(0)
+    assert dispatcher.assignments(now=0.1) == [], 'queued behind candidate 2 while b works'
+    assert dispatcher.complete(1)
+    assert sent_ids(dispatcher.assignments(now=0.2)) == [(3, 'b', 0)]
+    assert dispatcher.complete(2) and dispatcher.complete(3)
+    assert sent_ids(dispatcher.assignments(now=0.3)) == [(4, 'a', 0)]
+
+
+def test_a_single_evaluator_always_has_the_next_candidate_queued():
+    dispatcher = make_dispatcher(2)
+    dispatcher.heard_from('a', 2, now=0.0)
+    assert sent_ids(dispatcher.assignments(now=0.0)) == [(0, 'a', 0), (1, 'a', 0)]
 
 
 def test_nothing_is_sent_before_an_evaluator_is_heard():

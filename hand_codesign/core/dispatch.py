@@ -8,7 +8,10 @@ ROS makes the rules testable on their own and usable by any transport.
 Rules:
 - an evaluator is alive while its last heartbeat is younger than `heartbeat_timeout`;
 - a live evaluator gets at most `capacity` candidates at once (what it announces), so it
-  always has the next candidate queued while it evaluates one;
+  always has the next candidate queued while it evaluates one; but once no more candidates
+  wait than there are live evaluators (two or more), none is sent for the first time to an
+  evaluator that has one already: at the end of a generation the evaluator that is done first
+  takes the next, instead of idling while another works off its queue;
 - candidates of an evaluator that died go back to the front of the queue;
 - a candidate unanswered after `evaluation_timeout` is sent again to another evaluator; the
   first answer wins, later ones are ignored as duplicates;
@@ -152,11 +155,15 @@ class Dispatcher:
         return True
 
     def _least_loaded(self, pending, now):
+        live = self.live_evaluators(now)
+        room = {evaluator_id: state.capacity for evaluator_id, state in self.evaluators.items()}
+        if pending.attempts == 0 and 1 < len(live) and len(self._queue) <= len(live):
+            room = dict.fromkeys(room, 1)  # the last candidates: to evaluators with nothing
         candidates = [
             (len(state.assigned) / state.capacity, evaluator_id)
             for evaluator_id, state in self.evaluators.items()
-            if now - state.last_heard <= self.heartbeat_timeout
-            and len(state.assigned) < state.capacity
+            if evaluator_id in live
+            and len(state.assigned) < room[evaluator_id]
             and evaluator_id not in pending.rejected_by
             and pending.candidate.candidate_id not in state.assigned
         ]
