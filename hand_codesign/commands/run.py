@@ -128,8 +128,9 @@ def optimizer_parameters(arguments, task, bag):
     parameters = {
         'evaluators_expected': max(1, arguments.evaluators + bool(arguments.rig)),
         'subscribers_expected': 1,
-        'result_file': bag / 'result.json',
-        'own_evaluators': ','.join(own_roles(arguments))}
+        'result_file': bag / 'result.json'}
+    if arguments.evaluators:  # rcl refuses an empty value on the command line
+        parameters['own_evaluators'] = ','.join(own_roles(arguments))
     if getattr(arguments, 'audit_fraction', None) is not None:
         parameters['audit_fraction'] = arguments.audit_fraction
     if arguments.resume:

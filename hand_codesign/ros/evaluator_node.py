@@ -97,9 +97,7 @@ class EvaluatorNode(Node):
         self.take(self.inbox.candidate_arrived(message))
 
     def take(self, candidates):
-        if candidates:
-            self.work.extend(candidates)
-            self.publish_status()
+        self.work.extend(candidates)
 
     def work_off(self):
         """Evaluate and answer the first queued candidate (unless ROS shuts down meanwhile)."""
@@ -109,7 +107,8 @@ class EvaluatorNode(Node):
         self.evaluations.publish(sign_evaluation(self.key, answer))
         self.work.popleft()
         self.done += 1
-        self.publish_status()
+        if not self.work:  # idle: say so (and the final count) now, not at the next beat
+            self.publish_status()
         self.poll()
 
     def answer(self, message):
