@@ -9,17 +9,17 @@ Measures, in one run on the Task 5 scene:
   (recorder, evaluators, optimizer over DDS), physics steps of the evaluations told to the
   search over the wall time from the first candidate sent to the last evaluation received.
   Audit evaluations (a second evaluator checking an answer, hand_codesign.core.audits) are
-  cost, not progress: their steps are not counted, their time is; `--audit-fraction 0` shows
-  the rate without them (the first answers of each evaluator are audited unless it is 0).
+  cost, not progress: their steps are not counted, their time is. The run's own evaluators
+  are audited once each (their first answer); `--audit-fraction 0` leaves even that out.
 Prints the ratio of the 2-evaluator rate to twice the raw rate (target >= 0.95 at Table I's
 generation size, >= 0.90 at 16 candidates x 8 worlds) and of the 2-evaluator rate to the
 1-evaluator rate (target >= 1.8). The rates are wall-clock rates: other processes on the
 machine lower them (see the load average printed).
 
 The defaults are Table I's Task 5 generation (population 80, 64 world states). Small
-generations cost more: every candidate pays a fixed cost besides stepping (about 5 ms to
-build its worlds), and at the end of each generation one evaluator waits for the other's last
-candidate; with 16 candidates on 8 worlds the ratio measured here was about 0.75.
+generations cost more: every candidate pays a fixed cost besides stepping (building the hand,
+each world's object, the objectives: about a tenth of the bare loop's time), and at the end
+of each generation one evaluator waits for the other's last candidate.
 
 Usage: python bench/bench_system.py [--iterations 2] [--popsize 80] [--world-states 64]
                                     [--audit-fraction F]

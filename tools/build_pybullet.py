@@ -41,8 +41,11 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 SDIST_SHA256 = {
     '3.2.7': '042879db8d101ac7590dee475fc6aded508b85fe1273fdbbfde1d88bd200e14f',
 }
-RECIPE = 1  # bump when the flags or the workload change: the cache key changes with it
-COMMON_FLAGS = '-g0'  # no debug information: a 9 MB module instead of 140 MB
+RECIPE = 2  # bump when the flags or the workload change: the cache key changes with it
+# -g0: no debug information (a 9 MB module instead of 140 MB). The others let Bullet's calls
+# into its own functions go straight there instead of through the PLT (nothing interposes
+# them in an extension module): about 4 % faster again, arithmetic untouched.
+COMMON_FLAGS = '-g0 -fno-semantic-interposition -fno-plt -Wl,-Bsymbolic'
 GENERATE_FLAGS = '-fprofile-generate={profile} -fprofile-update=single'
 USE_FLAGS = '-fprofile-use={profile} -fprofile-correction -Wno-missing-profile'
 WORKLOAD = ROOT / 'tools' / 'physics_workload.py'
