@@ -8,14 +8,16 @@ whether the answer is right. Rules (the RunController applies them to each answe
 - an answer is audited when its candidate is drawn (probability `fraction`, a draw of the
   run's seed and the candidate id, so the same candidates are drawn in every run of a seed)
   and its evaluator is not one of the run's own, or when it is the first answer of an
-  evaluator that has not yet passed an audit in this run (probation). The run's own
-  evaluators (`own`: the roles `hand-codesign run` started on the optimizer's host, with keys
-  it never wrote to a file) are the same code on the same machine as the optimizer: a drawn
-  audit of theirs would cost a tenth of the run and catch nothing the probation does not (a
-  different build, a non-deterministic set-up), so only their probation is audited. Its further answers are held, untold, until that audit is settled: taken
-  if it passed, evaluated again by others if it failed. So an evaluator that lies on every
-  evaluation is caught on its first answer, before any of its answers is told, and the
-  result equals that of a run without it, for one extra evaluation per honest evaluator;
+  evaluator that has not yet passed an audit in this run (probation). Its further answers are
+  held, untold, until that audit is settled: taken if it passed, evaluated again by others if
+  it failed. So an evaluator that lies on every evaluation is caught on its first answer,
+  before any of its answers is told, and the result equals that of a run without it, for one
+  extra evaluation per honest evaluator;
+- the run's own evaluators (`own`: the roles `hand-codesign run` started on the optimizer's
+  host, with keys it never wrote to a file) are the same code on the same machine as the
+  optimizer: a drawn audit of theirs would cost a tenth of the run and catch nothing their
+  probation does not (a different build, a non-deterministic set-up), so only their
+  probation is audited;
 - the audit goes to another evaluator; when both agree bit for bit, the value stands and both
   evaluators have passed. When they differ, a third evaluator (and so on) is asked until two
   answers agree; every evaluator that answered otherwise is quarantined;
@@ -65,7 +67,7 @@ class Audits:
     def __init__(self, seed, fraction=DEFAULT_FRACTION, own=()):
         self.seed = seed
         self.fraction = fraction
-        self.own = frozenset(own)  # roles of the run's own evaluators (core.supervision)
+        self.own = frozenset(role for role in own if role)  # roles (core.supervision)
         self.passed = set()        # evaluators that agreed with another in an audit
         self.quarantined = []      # in the order they were caught
         self.audit_evaluations = 0

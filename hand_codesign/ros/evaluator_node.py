@@ -4,13 +4,10 @@ The evaluator node: evaluates candidates with hand_codesign.core.evaluate and an
 Which candidates it takes and what it evaluates are core.evaluation_jobs' rules; the node
 learns runs from the latched RunInfo and answers each candidate taken with an Evaluation or a
 rejection with the reason, never a crash; with a key (ros.keys) it takes only signed messages
-and signs its answers.
-
-One thread does everything: `spin` evaluates the queued candidates one after another and,
-between them and between the worlds of one, lets the executor handle what arrived (candidates,
-RunInfos, the heartbeat timer) at most every POLL_PERIOD, so heartbeats go on while PyBullet
-runs. A second executor thread would compete with PyBullet for the interpreter lock: with
-rclpy's MultiThreadedExecutor the same evaluations took about 25 % longer.
+and signs its answers. One thread does it all: between candidates and between the worlds of
+one, `spin` lets the executor take what arrived and beat the heartbeat (every POLL_PERIOD at
+most). An executor thread of its own would compete with PyBullet for the interpreter lock:
+under rclpy's MultiThreadedExecutor the same evaluations took about 25 % longer.
 """
 
 import collections
@@ -46,8 +43,7 @@ PARAMETERS = {
     'subscribers_expected': (1, 'evaluation subscribers to wait for before announcing', (0, 100)),
 }
 IDLE_WAIT = 0.1  # s an idle evaluator waits for something to arrive
-# s between two looks at the executor while evaluating (a world of Task 5 takes about 50 ms)
-POLL_PERIOD = 0.05
+POLL_PERIOD = 0.05  # s between looks at the executor while evaluating (a Task 5 world: 5 ms)
 
 
 class EvaluatorNode(Node):
@@ -71,7 +67,7 @@ class EvaluatorNode(Node):
             self.create_subscription(topics.MESSAGE_TYPES[name], name, callback,
                                      topics.QOS[name])
         self.create_timer(self.settings['heartbeat_period'], self.publish_status)
-        self.create_timer(1.0, lambda: self.take(self.inbox.orphans()))
+        self.create_timer(1.0, lambda: self.work.extend(self.inbox.orphans()))
         self.last_poll = time.monotonic()
         self.get_logger().info(f'evaluator {self.evaluator_id} ready')
 
@@ -91,13 +87,10 @@ class EvaluatorNode(Node):
             self.executor.spin_once(timeout_sec=0.0)
 
     def on_run_info(self, message):
-        self.take(self.inbox.run_announced(message))
+        self.work.extend(self.inbox.run_announced(message))
 
     def on_candidate(self, message):
-        self.take(self.inbox.candidate_arrived(message))
-
-    def take(self, candidates):
-        self.work.extend(candidates)
+        self.work.extend(self.inbox.candidate_arrived(message))
 
     def work_off(self):
         """Evaluate and answer the first queued candidate (unless ROS shuts down meanwhile)."""
@@ -132,8 +125,7 @@ class EvaluatorNode(Node):
         return answer
 
     def publish_status(self):
-        # Announcing itself once every expected subscriber (the optimizer and the recorder) has
-        # matched makes the bag get all its evaluations, even if it is killed after the first.
+        # announced once the optimizer and the recorder match, the bag gets all its evaluations
         if self.evaluations.get_subscription_count() < self.settings['subscribers_expected']:
             return
         self.status.publish(EvaluatorStatus(

@@ -44,8 +44,7 @@ PARAMETERS = {
     'heartbeat_timeout': (5.0, 's of evaluator silence before its candidates move', (0.1, 3600.0)),
     'evaluation_timeout': (0.0, 's before a candidate is sent again; 0: adaptive', (0.0, 86400.0)),
     'audit_fraction': (DEFAULT_FRACTION, 'share of answers audited (core.audits)', (0.0, 1.0)),
-    'own_evaluators': ('', 'comma-separated roles of the evaluators the runner started: '
-                           'audited on probation only (core.audits)', None),
+    'own_evaluators': ('', "roles of the run's own evaluators, a,b: see core.audits", None),
     'result_file': ('', 'write the final result as JSON here; empty: do not', None),
     'resume_bag': ('', 'continue the interrupted run of this bag (its task, seed and budget; '
                        'task_file and the budget parameters are then ignored)', None),
@@ -79,7 +78,7 @@ class OptimizerNode(Node):
             task, self.settings['run_id'] or default_run_id(task), self, resumed,
             self.settings['heartbeat_timeout'], self.settings['evaluation_timeout'],
             self.settings['evaluators_expected'], audit_fraction=self.settings['audit_fraction'],
-            own_evaluators=[role for role in self.settings['own_evaluators'].split(',') if role])
+            own_evaluators=self.settings['own_evaluators'].split(','))
         matched = PublisherEventCallbacks(matched=self.start_if_ready)
         self.publishers_ = {name: self.create_publisher(
             topics.RECORDED_MESSAGE_TYPES[name], name, topics.QOS[name], event_callbacks=matched)
@@ -123,8 +122,7 @@ class OptimizerNode(Node):
         else:
             self.run.evaluated(*key, message.objectives, message.wall_time)
 
-    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states,
-                       design):
+    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states, design):
         self.publish(topics.CANDIDATES, self.signer.candidate(candidate_message(
             self.run.run_id, candidate, candidate.structure, genome_names, evaluator_id,
             attempt, world_states, design)))
