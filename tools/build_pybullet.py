@@ -5,9 +5,10 @@ Why: 70 % of a rollout's time is Bullet's multibody constraint solver and 14 % i
 detection (core/sim.py). The PyPI wheel is compiled once for every machine; compiled here
 again, instrumented, run on a co-design workload and compiled once more with that profile
 (GCC's -fprofile-generate / -fprofile-use), the same source steps 1.1 to 1.25 times as fast
-on Task 5's scene (the ratio varies from run to run on a shared machine). The objectives stay bit-identical: profile-guided optimization lays out
-and inlines code by measured branch frequencies, it never reorders floating-point arithmetic
-(no -ffast-math, no -march: the same SSE2 instructions as the wheel).
+on Task 5's scene (the ratio varies from run to run on a shared machine). The objectives stay
+bit-identical: profile-guided optimization lays out and inlines code by measured branch
+frequencies, it never reorders floating-point arithmetic (no -ffast-math, no -march: the same
+SSE2 instructions as the wheel).
 `python bench/bench_pybullet_build.py` measures both claims against the wheel in one run.
 
 Steps (about 10 minutes on 2 idle cores, once; the result is cached, see CACHE):
