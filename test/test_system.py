@@ -391,11 +391,11 @@ def nodes_by_hand(tmp_path, env):
 
 
 def test_evaluator_keeps_its_heartbeat_while_it_evaluates(tmp_path):
-    # candidates of 300 worlds take seconds; the heartbeat period is 0.5 s
+    # candidates of 500 worlds take seconds; the heartbeat period is 0.5 s
     bag = tmp_path / 'long'
     finish(start_run(bag, 1, budget=['--iterations', '1', '--popsize', '3',
-                                     '--world-states', '300', '--seed', '7']))
+                                     '--world-states', '500', '--seed', '7']))
     record = read_run(bag)
-    assert np.max(record.evaluations['wall_time']) > 2.0
+    assert np.max(record.evaluations['wall_time']) > 1.5
     stamps = np.sort(record.evaluator_status['stamp']) * 1e-9
     assert np.max(np.diff(stamps)) < 1.0
