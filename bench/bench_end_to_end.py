@@ -5,11 +5,11 @@ Runs `hand-codesign run` on Task 5 with 2 evaluators, alternately with this tree
 reference: the tree of commit REFERENCE (the code when the performance issue was filed, before
 the single-threaded evaluator, the audit and dispatch changes, the start-up work and the
 profile-optimized PyBullet), extracted with `git archive` and run with the PyPI wheel's
-PyBullet (kept by tools/build_pybullet.py beside the venv). Per run, from its bag: the physics
-steps of the accepted evaluations (simulated_time / time_step, each candidate counted once)
-over the wall time from the first candidate recorded to the last evaluation. Prints the ratio
-of the fastest runs (target >= 1.3) and whether both versions told the search the same
-generations (they must: the same best design, bit for bit).
+PyBullet (kept by tools/build_pybullet.py beside the venv). Per run, from its bag
+(analysis.records.stepping_rate): the physics steps of the accepted evaluations, each
+candidate counted once, over the wall time from the first candidate recorded to the last
+evaluation. Prints the ratio of the fastest runs (target >= 1.3) and whether both versions
+told the search the same generations (they must: the same best design, bit for bit).
 
 Usage: python bench/bench_end_to_end.py [--iterations 3] [--popsize 80] [--world-states 64]
                                         [--turns 2] [--reference COMMIT]
@@ -29,8 +29,7 @@ sys.path.insert(0, str(ROOT / 'tools'))
 
 import build_pybullet  # noqa: E402, I100: a tool script, not a package
 from hand_codesign.analysis.bag import read_run  # noqa: E402, I100
-from hand_codesign.analysis.records import evaluation_rows  # noqa: E402
-from hand_codesign.analysis.records import run_task_of  # noqa: E402
+from hand_codesign.analysis.records import stepping_rate  # noqa: E402
 import numpy as np  # noqa: E402
 
 REFERENCE = 'c411ce1'
@@ -56,21 +55,7 @@ def run(tree, module_paths, arguments, bag):
                '--world-states', str(arguments.world_states)]
     environment = dict(os.environ, PYTHONPATH=os.pathsep.join(map(str, module_paths)))
     subprocess.run(command, cwd=tree, env=environment, check=True, stdout=subprocess.DEVNULL)
-    return bag_rate(bag)
-
-
-def bag_rate(bag):
-    """Return the physics steps per wall second of the run in `bag` (see the module doc)."""
-    record = read_run(bag)
-    rows = evaluation_rows(record)
-    told = {}
-    for candidate_id, simulated, ok in zip(rows.candidate_id, rows.simulated_time, rows.ok):
-        if ok:
-            told.setdefault(candidate_id, simulated)
-    time_step = run_task_of(record).time_step
-    steps = sum(round(simulated / time_step) for simulated in told.values())
-    wall = (np.max(rows.log_time) - np.min(record.candidates['log_time'])) * 1e-9
-    return steps / wall
+    return stepping_rate(read_run(bag))
 
 
 def best_fitnesses(bag):

@@ -36,6 +36,7 @@ import time
 from bench_core import bare_loop
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.records import evaluation_rows
+from hand_codesign.analysis.records import stepping_rate
 from hand_codesign.core.evaluate import shared_simulator
 from hand_codesign.core.objectives import goal_schedule
 from hand_codesign.core.task import load_task
@@ -59,8 +60,8 @@ def raw_rate(task, bag, count):
     return count * steps_per_candidate / seconds
 
 
-def system_rate(task, evaluators, arguments, folder):
-    """Run the system; return physics steps per wall second of the evaluation phase."""
+def system_rate(evaluators, arguments, folder):
+    """Run the system; return its bag, physics steps per wall second and audit evaluations."""
     bag = pathlib.Path(folder) / f'evaluators-{evaluators}'
     command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK_FILE),
                '--evaluators', str(evaluators), '--bag', str(bag), '--quiet',
@@ -72,12 +73,8 @@ def system_rate(task, evaluators, arguments, folder):
                    env=dict(os.environ, AMENT_PREFIX_PATH=os.environ.get(
                        'AMENT_PREFIX_PATH', sys.prefix)))
     record = read_run(bag)
-    rows = evaluation_rows(record)
-    steps = np.sum(rows.simulated_time[rows.ok]) / task.time_step   # told ones only
-    started = np.min(record.candidates['log_time'])
-    ended = np.max(rows.log_time)
-    audits = int(np.sum(rows.status == 'duplicate'))
-    return bag, steps / ((ended - started) * 1e-9), audits
+    audits = int(np.sum(evaluation_rows(record).status == 'duplicate'))
+    return bag, stepping_rate(record), audits
 
 
 def main():
@@ -89,8 +86,8 @@ def main():
     arguments = parser.parse_args()
     task = load_task(TASK_FILE).replace(num_world_states=arguments.world_states, seed=1)
     with tempfile.TemporaryDirectory() as folder:
-        _, one, _ = system_rate(task, 1, arguments, folder)
-        bag, two, audits = system_rate(task, 2, arguments, folder)
+        _, one, _ = system_rate(1, arguments, folder)
+        bag, two, audits = system_rate(2, arguments, folder)
         raw = raw_rate(task, bag, 24)
     print(f'Task 5, {arguments.iterations} generations x {arguments.popsize} candidates x '
           f'{arguments.world_states} worlds ({time.strftime("%H:%M:%S")}, load average '

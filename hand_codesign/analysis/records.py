@@ -15,7 +15,8 @@ work on the RunRecord it returns:
 - `best_candidate_id(record)` and `ranked_candidate_id(record, generation, rank)`: which design
   a verb works on by default and on request;
 - `restarts_of(record)`: the CMA-ES instances of a run with restarts (ipop-cma, bipop-cma);
-- `archive_of(record)`: the quality-diversity optimizer (cma-mae, cma-me) with its archive.
+- `archive_of(record)`: the quality-diversity optimizer (cma-mae, cma-me) with its archive;
+- `stepping_rate(record)`: the physics steps per wall second of the run, as its user saw it.
 """
 
 import dataclasses
@@ -272,6 +273,19 @@ def evaluation_rows(record):
         gene_names=gene_names,
         genes=genes,
     )
+
+
+def stepping_rate(record):
+    """
+    Return the physics steps per wall second of a run, from its bag.
+
+    The steps of the accepted evaluations (simulated_time over the time step, once per
+    candidate: audits and late duplicates are cost, not progress), over the wall time from the
+    first candidate recorded to the last evaluation.
+    """
+    rows = evaluation_rows(record)
+    steps = np.sum(rows.simulated_time[rows.ok]) / run_task_of(record).time_step
+    return steps / ((np.max(rows.log_time) - np.min(record.candidates['log_time'])) * 1e-9)
 
 
 @dataclasses.dataclass

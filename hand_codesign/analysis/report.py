@@ -423,11 +423,9 @@ class Report:
     def archive_text(self):
         if self.archive is None:
             return ''
-        table = [self.elite_header()] + self.elite_rows(ELITES_LISTED)
-        widths = [max(len(row[column]) for row in table) for column in range(len(table[0]))]
-        return '\n'.join([f'archive: the {len(table) - 1} best of {len(self.elites)} elites'] + [
-            '  '.join(cell.rjust(width) for cell, width in zip(row, widths)).rstrip()
-            for row in table])
+        rows = self.elite_rows(ELITES_LISTED)
+        return (f'archive: the {len(rows)} best of {len(self.elites)} elites\n'
+                + _aligned([self.elite_header()] + rows))
 
     def best_parameters(self):
         """Return [(gene, physical value, unit, lower, upper, normalized)] of the best design."""
@@ -609,9 +607,14 @@ class Report:
                          + [f'{v:.4g}' for v in generations.median[index]]
                          + [f'{generations.best_fitness[index]:.4g}',
                             '' if evaluations != evaluations else str(int(evaluations))])
-        widths = [max(len(row[column]) for row in table) for column in range(len(header))]
-        return '\n'.join('  '.join(cell.rjust(width) for cell, width in zip(row, widths))
-                         for row in table)
+        return _aligned(table)
+
+
+def _aligned(table):
+    """Return rows of text cells as lines, each column right-aligned to its widest cell."""
+    widths = [max(len(row[column]) for row in table) for column in range(len(table[0]))]
+    return '\n'.join('  '.join(cell.rjust(width) for cell, width in zip(row, widths)).rstrip()
+                     for row in table)
 
 
 def _markdown_cell(text):

@@ -67,7 +67,7 @@ class Audits:
     def __init__(self, seed, fraction=DEFAULT_FRACTION, own=()):
         self.seed = seed
         self.fraction = fraction
-        self.own = frozenset(role for role in own if role)  # roles (core.supervision)
+        self.own = frozenset(own)  # roles of the run's own evaluators (core.supervision)
         self.passed = set()        # evaluators that agreed with another in an audit
         self.quarantined = []      # in the order they were caught
         self.audit_evaluations = 0

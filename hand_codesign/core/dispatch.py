@@ -115,6 +115,7 @@ class Dispatcher:
         """Return the (candidate, evaluator_id, attempt) to send now."""
         self._reclaim_from_silent(now)
         self._requeue_overdue(now)
+        live = set(self.live_evaluators(now))
         sent = []
         while self._queue:
             candidate_id = self._queue[0]
@@ -122,7 +123,7 @@ class Dispatcher:
             if pending is None:
                 self._queue.popleft()
                 continue
-            evaluator_id = self._least_loaded(pending, now)
+            evaluator_id = self._least_loaded(pending, live)
             if evaluator_id is None:
                 break
             self._queue.popleft()
@@ -154,16 +155,14 @@ class Dispatcher:
             self._queue.appendleft(candidate_id)
         return True
 
-    def _least_loaded(self, pending, now):
-        live = self.live_evaluators(now)
-        room = {evaluator_id: state.capacity for evaluator_id, state in self.evaluators.items()}
-        if pending.attempts == 0 and 1 < len(live) and len(self._queue) <= len(live):
-            room = dict.fromkeys(room, 1)  # the last candidates: to evaluators with nothing
+    def _least_loaded(self, pending, live):
+        # the last candidates of a batch go only to evaluators with nothing to do
+        last = pending.attempts == 0 and 1 < len(live) and len(self._queue) <= len(live)
         candidates = [
             (len(state.assigned) / state.capacity, evaluator_id)
             for evaluator_id, state in self.evaluators.items()
             if evaluator_id in live
-            and len(state.assigned) < room[evaluator_id]
+            and len(state.assigned) < (1 if last else state.capacity)
             and evaluator_id not in pending.rejected_by
             and pending.candidate.candidate_id not in state.assigned
         ]

@@ -14,31 +14,30 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.executors import SingleThreadedExecutor
 
 
-def run_node(make_node, logger_name, args=None, errors=(), until=None, executor=None,
-             farewell=None, spin=None):
+def run_node(make_node, logger_name, args=None, errors=(), until=None, farewell=None,
+             spin=None):
     """
     Spin the node `make_node()` builds until shutdown; return the process's exit status.
 
     errors: more exception types that mean a user's mistake. until: a function of the node
     returning the Future whose completion ends the spin (None: spin until shutdown).
-    executor: a function returning the executor to spin with (None: rclpy's default one).
     farewell: a function of the node called once it is destroyed, e.g. to log what it did.
     spin: a function of (node, executor) that spins the node its own way instead of
-    rclpy.spin (the executor is rclpy's SingleThreadedExecutor unless `executor` says).
+    rclpy.spin, with a SingleThreadedExecutor.
     """
     rclpy.init(args=args)
     node = None
-    spinner = executor() if executor is not None else None
+    spinner = None
     try:
         node = make_node()
         if spin is not None:
-            spinner = spinner or SingleThreadedExecutor()
+            spinner = SingleThreadedExecutor()
             spinner.add_node(node)
             spin(node, spinner)
         elif until is None:
-            rclpy.spin(node, executor=spinner)
+            rclpy.spin(node)
         else:
-            rclpy.spin_until_future_complete(node, until(node), executor=spinner)
+            rclpy.spin_until_future_complete(node, until(node))
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except (ParameterException, UserError, *errors) as error:

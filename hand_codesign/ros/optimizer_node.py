@@ -78,7 +78,7 @@ class OptimizerNode(Node):
             task, self.settings['run_id'] or default_run_id(task), self, resumed,
             self.settings['heartbeat_timeout'], self.settings['evaluation_timeout'],
             self.settings['evaluators_expected'], audit_fraction=self.settings['audit_fraction'],
-            own_evaluators=self.settings['own_evaluators'].split(','))
+            own_evaluators=filter(None, self.settings['own_evaluators'].split(',')))
         matched = PublisherEventCallbacks(matched=self.start_if_ready)
         self.publishers_ = {name: self.create_publisher(
             topics.RECORDED_MESSAGE_TYPES[name], name, topics.QOS[name], event_callbacks=matched)
