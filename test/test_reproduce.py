@@ -32,6 +32,7 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK5 = ROOT / 'config' / 'reproduce' / 'task5.yaml'
+TASK5_ALONG_X = ROOT / 'config' / 'reproduce' / 'task5_along_x.yaml'
 
 
 def test_list_names_every_experiment_first_on_its_line(capsys):
@@ -88,6 +89,11 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
         'worst', 0.25, 'generation')
     for task in (worst, resampled, both):  # nothing else changed
         assert task.replace(worlds=paper.worlds, source_text=paper.source_text) == paper
+    along_x = parse_task(experiments.configuration_task_text(
+        by_key['cma-along-x'], (experiments.pinned_dir() / 'task5_along_x.yaml').read_text()))
+    assert [goal.axes for goal in along_x.goals.position] == [('x',)]
+    assert along_x.replace(goals=paper.goals, source_text=paper.source_text) == paper
+    assert levers.tolerances() == (Tolerance('plane', 0.005), Tolerance('x', 0.005))
     for name in ('levers-task5', 'levers-task6'):  # quality diversity, its archive's defaults
         mae, = [c for c in experiments.EXPERIMENTS[name].configurations if c.key == 'cma-mae']
         text = (experiments.pinned_dir() / mae.preset).read_text()
@@ -121,6 +127,20 @@ def test_measures_come_from_the_evaluated_rollout():
     assert np.array_equal(measured.errors['orientation'], evaluation.final_errors[:, 1])
     # the plane error leaves out the height: at most the 3-D distance
     assert np.all(measured.errors['plane'] <= measured.errors['position'] + 1e-12)
+
+
+def test_the_error_along_x_is_the_distance_of_a_goal_that_measures_x_alone():
+    # task5_along_x.yaml's position goal measures x alone: eq. (3)'s distance is |x offset|
+    task = load_task(TASK5_ALONG_X).replace(seed=2)
+    assert task.goals.position[-1].axes == ('x',)
+    x = np.random.default_rng(7).random(len(genome_spec(task).names))
+    measured = measure_worlds(x, task, unseen_world_states(task, 6))
+    for errors in (measured.errors, measured.initial_errors):
+        np.testing.assert_allclose(errors['x'], errors['position'], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(np.hypot(errors['x'], errors['y']), errors['plane'],
+                                   rtol=0, atol=1e-12)
+    assert np.any(measured.errors['y'] > 1e-4)  # the worlds' offsets along y are kept
+    assert Tolerance('x', 0.005).describe() == 'error along x < 5 mm'
 
 
 class FinalState:
@@ -178,7 +198,8 @@ TINY = """
         'tiny', 'two small Task 5 runs',
         (Configuration('torque-cma-2w', 'task5.yaml', 'cma', 2, 'torque'),
          Configuration('torque-mocma-16w', 'task5.yaml', 'mocma', 16, 'torque')),
-        Tolerance('plane', 0.005), {'smoke': Budget('smoke', 20, 4, 12, 1)})
+        Tolerance('plane', 0.005), {'smoke': Budget('smoke', 20, 4, 12, 1)},
+        also=(Tolerance('x', 0.005),))
     sys.exit(main(['reproduce', 'tiny', '--budget', 'smoke', '--evaluators', '1',
                    '--out', sys.argv[1]]))
 """
@@ -273,8 +294,10 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
     tolerance = Tolerance('plane', 0.005)
     for key, bag in (('torque-cma-2w', finished.parent), ('torque-mocma-16w', resumed)):
         task, x, _ = campaign.final_design(bag)
-        summary = summarize(measure_worlds(x, task, unseen_world_states(task, 12)), tolerance)
+        measured = measure_worlds(x, task, unseen_world_states(task, 12))
+        summary = summarize(measured, tolerance)
         row = table[key]
+        assert float(row['within_x']) == summarize(measured, Tolerance('x', 0.005)).within
         assert float(row['within']) == summary.within
         assert float(row['within_by_seed']) == summary.within  # one seed: its own share
         assert float(row['median']) == summary.median
@@ -282,7 +305,20 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
         assert int(row['joint_limits_found']) == int(summary.joint_limits_found)
         assert row['seeds'] == '1' and row['unseen_worlds'] == '12'
     assert (out / 'tiny.md').read_text().count('| torque-') == 2
+    assert 'within (error along x < 5 mm)' in (out / 'tiny.md').read_text()
     assert (out / 'tiny.png').stat().st_size > 0
+
+    # measures cached before an error kind the tables need existed are measured again
+    cached = out / 'measures' / 'torque-cma-2w-seed1.json'
+    values = json.loads(cached.read_text())
+    del values['worlds']['errors']['x']
+    cached.write_text(json.dumps(values))
+    third = start_tiny(script, out)
+    output, _ = third.communicate(timeout=300)
+    assert third.returncode == 0, output
+    assert 'torque-cma-2w-seed1 (finished: measuring)' in output
+    assert 'torque-mocma-16w-seed1 (finished and measured: kept)' in output
+    assert 'x' in json.loads(cached.read_text())['worlds']['errors']
 
 
 def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsys):

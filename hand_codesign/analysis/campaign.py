@@ -145,16 +145,31 @@ def structure_text(structure):
     return '(' + ','.join(str(joints) for joints in structure) + ')'
 
 
-def cached_measures(path, compute):
-    """Return the JSON record at path, computing and writing it first if it is missing."""
-    path = pathlib.Path(path)
-    if path.exists():
-        return json.loads(path.read_text(encoding='utf-8'))
+def cached_measures(path, compute, kinds=()):
+    """
+    Return the JSON record at path, computing and writing it first if it is missing.
+
+    A record measured before one of the error `kinds` existed is measured again.
+    """
+    values = read_measures(path, kinds)
+    if values is not None:
+        return values
     values = compute()
     path.parent.mkdir(parents=True, exist_ok=True)
     temporary = path.with_suffix('.tmp')
     temporary.write_text(json.dumps(values), encoding='utf-8')
     temporary.replace(path)
+    return values
+
+
+def read_measures(path, kinds=()):
+    """Return the measures record at path, or None if it is missing or lacks an error kind."""
+    path = pathlib.Path(path)
+    if not path.exists():
+        return None
+    values = json.loads(path.read_text(encoding='utf-8'))
+    if any(kind not in values['worlds']['errors'] for kind in kinds):
+        return None
     return values
 
 
@@ -198,10 +213,13 @@ def error_unit(tolerance):
     return 'rad' if tolerance.kind == 'orientation' else 'm'
 
 
-def write_table(out, name, rows):
-    """Write <name>.csv (SI units, exact floats) and <name>.md of the rows (dicts)."""
-    columns = [[_cell(row[column]) for row in rows] for column in TABLE_COLUMNS]
-    write_csv(pathlib.Path(out) / f'{name}.csv', list(TABLE_COLUMNS), columns)
+def write_table(out, name, rows, also=()):
+    """Write <name>.csv (SI units, exact floats) of the rows (dicts), further shares last."""
+    names = list(TABLE_COLUMNS) + [column for tolerance in also
+                                   for column in (also_column(tolerance),
+                                                  also_column(tolerance) + '_by_seed')]
+    columns = [[_cell(row[column]) for row in rows] for column in names]
+    write_csv(pathlib.Path(out) / f'{name}.csv', names, columns)
 
 
 def _cell(value):
@@ -225,22 +243,31 @@ def error_text(value, tolerance):
     return f'{value * 1000:.1f} mm'
 
 
-def markdown_table(rows, tolerance, first='configuration'):
+def markdown_table(rows, tolerance, first='configuration', also=()):
     """Return the Markdown table of rows: a line per configuration (or structure)."""
+    further = ''.join(f'within ({other.describe()}) | each seed (%) | ' for other in also)
     lines = [f'| {first} | policy | algorithm | training worlds | seeds | unseen worlds | '
-             f'within ({tolerance.describe()}) | each seed (%) | median | p90 | '
+             f'within ({tolerance.describe()}) | each seed (%) | {further}median | p90 | '
              'median at the start | joint limits found |',
-             '|---|---|---|---|---|---|---|---|---|---|---|---|']
+             '|---' * (12 + 2 * len(also)) + '|']
     for row in rows:
+        shares = [(row['within'], row['within_by_seed'])] + [
+            (row[also_column(other)], row[also_column(other) + '_by_seed']) for other in also]
         lines.append(
             f'| {row[first]} | {row["policy"]} | {row["algorithm"]} | {row["world_states"]} '
-            f'| {row["seeds"]} | {row["unseen_worlds"]} | {percent(row["within"])} | '
-            f'{" ".join(f"{100 * share:.0f}" for share in row["within_by_seed"])} | '
-            f'{error_text(row["median"], tolerance)} | {error_text(row["p90"], tolerance)} | '
+            f'| {row["seeds"]} | {row["unseen_worlds"]} | '
+            + ''.join(f'{percent(pooled)} | {seed_percents(by_seed)} | '
+                      for pooled, by_seed in shares)
+            + f'{error_text(row["median"], tolerance)} | {error_text(row["p90"], tolerance)} | '
             f'{error_text(row["initial_median"], tolerance)} | '
             f'{percent(row["joint_limits_found_share"])} ({row["joint_limits_found"]} of '
             f'{row["seeds"]}) |')
     return '\n'.join(lines) + '\n'
+
+
+def seed_percents(shares):
+    """Return shares by seed as the tables write them, e.g. '19 37 32'."""
+    return ' '.join(f'{100 * share:.0f}' for share in shares)
 
 
 def plot_errors(path, groups, tolerance, title, kinds=None):
@@ -362,8 +389,24 @@ def configuration_rows(experiment, budget, measured):
             continue
         row = row_head(experiment, budget, configuration, configuration.key)
         row.update(pooled_row(measured[configuration.key], experiment.tolerance))
+        row.update(also_columns(measured[configuration.key], experiment.also))
         rows.append(row)
     return rows
+
+
+def also_columns(measured, tolerances):
+    """Return {column: value}: the pooled share within each further tolerance, and by seed."""
+    columns = {}
+    for tolerance in tolerances:
+        row = pooled_row(measured, tolerance)
+        columns[also_column(tolerance)] = row['within']
+        columns[also_column(tolerance) + '_by_seed'] = row['within_by_seed']
+    return columns
+
+
+def also_column(tolerance):
+    """Return the table column of the share within a further tolerance, e.g. 'within_x'."""
+    return f'within_{tolerance.kind}'
 
 
 def structure_rows(experiment, budget, measured):
@@ -389,11 +432,11 @@ def write_results(out, experiment, budget, seeds):
     rows = configuration_rows(experiment, budget, measured)
     name = experiment.name
     paths = [out / f'{name}.csv', out / f'{name}.md', out / f'{name}.png']
-    write_table(out, name, rows)
+    write_table(out, name, rows, experiment.also)
     lines = [f'# {name}', '', experiment.summary + '.', '',
              f'Budget {budget.describe()}; seeds 1 to {seeds}; a row per configuration, '
              'the unseen worlds of its seeds pooled.', '',
-             markdown_table(rows, experiment.tolerance)]
+             markdown_table(rows, experiment.tolerance, also=experiment.also)]
     labels = [f'{row["policy"]} {row["algorithm"]} {row["world_states"]}w' for row in rows]
     if len(set(labels)) < len(labels):  # levers that differ by a task option, not algorithm
         labels = [row['configuration'] for row in rows]

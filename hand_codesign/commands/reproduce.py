@@ -317,16 +317,21 @@ class Campaign:
 
     def measured(self, configuration, seed):
         """Return True if the run is finished and every measure of it is cached."""
-        paths = [self.measures_path(configuration, seed)]
-        if self.experiment.per_structure:
-            paths.append(self.measures_path(configuration, seed, '.structures'))
-        return all(path.exists() for path in paths)
+        if campaign.read_measures(self.measures_path(configuration, seed),
+                                  self.error_kinds()) is None:
+            return False
+        return (not self.experiment.per_structure
+                or self.measures_path(configuration, seed, '.structures').exists())
+
+    def error_kinds(self):
+        return [tolerance.kind for tolerance in self.experiment.tolerances()]
 
     def measure(self, configuration, seed, bag, processes):
         """Measure a finished run's design (and each structure's best) on unseen worlds."""
         tolerance, count = self.experiment.tolerance, self.budget.unseen_worlds
         campaign.cached_measures(self.measures_path(configuration, seed),
-                                 lambda: campaign.measure_bag(bag, tolerance, count, processes))
+                                 lambda: campaign.measure_bag(bag, tolerance, count, processes),
+                                 self.error_kinds())
         if self.experiment.per_structure:
             bags = campaign.attempts(self.runs_dir, experiments.run_key(configuration, seed))
             campaign.cached_measures(

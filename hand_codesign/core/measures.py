@@ -10,9 +10,11 @@ the first k of a larger set are the k of a smaller one.
 Per world, from the very rollout that `core.evaluate` runs (the same simulator, design and
 policy; the measure only looks at the scene, it never changes it):
 
-- the final errors with respect to the last goal: `position` (eq. 3's distance, m), `plane`
-  (the distance in the plane of the table, x and y of the world: a scaled box rests higher,
-  a height no hand can change) and `orientation` (eq. 4's angle, rad);
+- the final errors with respect to the last goal: `position` (eq. 3's distance, m, over the
+  goal's axes), `plane` (the distance in the plane of the table, x and y of the world: a
+  scaled box rests higher, a height no hand can change), `x` and `y` (the distance along one
+  world axis: a hand whose fingers all swing in the x-z plane pushes along x and leaves y
+  where the world put it) and `orientation` (eq. 4's angle, rad);
 - **resting on a limit while touching** (`limit_contacts`): at the end of the rollout (its
   last step, or the goal check where early termination stopped it) some finger has a joint
   within LIMIT_TOLERANCE of one of its limits (or past it: Bullet's limits are soft) and
@@ -38,7 +40,8 @@ UNSEEN_STREAM = 11  # second entropy word of the unseen worlds' SeedSequence
 LIMIT_TOLERANCE = 0.02  # rad: a joint this close to a limit (or past it) rests on it
 CONTACT_DISTANCE = 0.001  # m: a contact point this close (or penetrating) is a touch
 LIMITS_FOUND_SHARE = 0.5  # share of the worlds in which the design must rest on a limit
-ERROR_KINDS = ('position', 'plane', 'orientation')
+ERROR_KINDS = ('position', 'plane', 'x', 'y', 'orientation')
+AXES = ('x', 'y')  # the error kinds along one world axis
 CHUNK = 50
 
 
@@ -53,6 +56,8 @@ class Tolerance:
         """Return e.g. 'plane error < 5 mm'."""
         if self.kind == 'orientation':
             return f'orientation error < {self.limit:g} rad'
+        if self.kind in AXES:
+            return f'error along {self.kind} < {self.limit * 1000:g} mm'
         return f'{self.kind} error < {self.limit * 1000:g} mm'
 
 
@@ -111,11 +116,18 @@ def measure_worlds(x, task, worlds, processes=1):
     initial, final, final_poses, collisions, contacts = (np.concatenate(column)
                                                          for column in zip(*parts))
     starts, goals = start_and_goal_poses(task, worlds)
-    errors = {'position': final[:, 0], 'orientation': final[:, 1],
-              'plane': np.linalg.norm(final_poses[:, :2] - goals[:, :2], axis=1)}
-    initial_errors = {'position': initial[:, 0], 'orientation': initial[:, 1],
-                      'plane': np.linalg.norm(starts[:, :2] - goals[:, :2], axis=1)}
+    errors = dict(_offsets(final_poses, goals), position=final[:, 0],
+                  orientation=final[:, 1])
+    initial_errors = dict(_offsets(starts, goals), position=initial[:, 0],
+                          orientation=initial[:, 1])
     return WorldMeasures(errors, initial_errors, collisions, contacts)
+
+
+def _offsets(poses, goals):
+    """Return {'plane', 'x', 'y'}: the distances of the poses' positions from the goals'."""
+    offsets = np.asarray(poses)[:, :2] - np.asarray(goals)[:, :2]
+    return {'plane': np.linalg.norm(offsets, axis=1), 'x': np.abs(offsets[:, 0]),
+            'y': np.abs(offsets[:, 1])}
 
 
 def summarize(measures: WorldMeasures, tolerance: Tolerance):
