@@ -132,6 +132,9 @@ def add_bag_arguments(verb, parser):
         parser.add_argument('--workers', type=int, help='processes (default: all cores)')
     elif verb == 'export':
         parser.add_argument('--out', required=True, help='folder for the URDF and YAML')
+        parser.add_argument('--candidate', type=int, metavar='ID',
+                            help="a recorded candidate's id instead of the best design, e.g. "
+                                 'an elite of the archive `analyze` lists')
     elif verb == 'evaluate':
         parser.add_argument('--top', type=int, default=3,
                             help='how many of the best designs (default 3)')

@@ -107,6 +107,29 @@ def test_urdf_in_pybullet_is_the_simulated_hand(exported):
         client.disconnect()
 
 
+def test_any_recorded_candidate_exports_and_an_unknown_one_is_one_line(real_run, tmp_path,
+                                                                       capsys):
+    # another elite of an archive, or any design of the run: here the first one evaluated
+    record = read_run(real_run.bag)
+    other = min(int(i) for i in record.evaluations['candidate_id'])
+    assert other != real_run.result['best_candidate_id']
+    out = tmp_path / 'other'
+    assert main(['export', str(real_run.bag), '--out', str(out), '--candidate', str(other)]) == 0
+    export = load_export(out)
+    assert export.document['source']['candidate_id'] == other
+    recorded = recorded_design(record, other)
+    assert np.array_equal(export.objectives, recorded.objectives)
+    assert np.array_equal(resimulate(export).objectives, recorded.objectives)
+    capsys.readouterr()
+    for wrong, message in (('999999', 'candidate 999999 is not in the bag'),
+                           ('-1', '--candidate -1: expected a candidate id')):
+        assert main(['export', str(real_run.bag), '--out', str(tmp_path / 'x'),
+                     '--candidate', wrong]) == 2
+        error = capsys.readouterr().err
+        assert message in error and len(error.strip().splitlines()) == 1
+    assert not (tmp_path / 'x').exists()
+
+
 def test_broken_export_names_file_and_key(exported, tmp_path):
     text = (exported / 'controller.yaml').read_text()
     broken = tmp_path / 'controller.yaml'

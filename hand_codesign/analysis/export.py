@@ -1,5 +1,9 @@
 """
-`hand-codesign export BAG --out DIR`: the best design as URDF and its controller as YAML.
+`hand-codesign export BAG --out DIR [--candidate ID]`: a design as URDF and its controller as YAML.
+
+The design is the run's best, or with `--candidate` any candidate the bag records: another
+elite of a quality-diversity archive (`analyze` lists them with their ids), a design of an
+earlier generation.
 
 DIR receives:
 
@@ -43,9 +47,14 @@ YAML_NAME = 'controller.yaml'
 
 
 def export_command(arguments):
-    """Export the best design of a bag; return 0, or 1 if re-simulating it differs."""
+    """Export the best (or the chosen) design of a bag; return 0, or 1 if re-simulating it
+    differs."""
     record = records.open_run(arguments.bag)
-    design = records.recorded_design(record, records.best_candidate_id(record))
+    chosen = arguments.candidate
+    if chosen is not None and chosen < 0:
+        raise UserError(f'--candidate {chosen}: expected a candidate id of the bag (0 or more)')
+    design = records.recorded_design(
+        record, records.best_candidate_id(record) if chosen is None else chosen)
     out = pathlib.Path(arguments.out)
     paths = export_design(record, design, out)
     print(f'exported candidate {design.candidate_id} of generation {design.generation} '
