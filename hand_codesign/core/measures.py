@@ -30,6 +30,7 @@ one and it never counts as touching.
 
 import dataclasses
 import math
+from typing import Optional
 
 from hand_codesign.core.evaluate import _TaskContext, evaluate_design
 from hand_codesign.core.robustness import map_chunks, start_and_goal_poses
@@ -79,6 +80,7 @@ class WorldMeasures:
     initial_errors: dict  # kind -> (worlds,) error at the start
     collisions: np.ndarray  # (worlds,) bool
     limit_contacts: np.ndarray  # (worlds,) bool
+    final_positions: Optional[np.ndarray] = None  # (worlds, 3) m, world frame; not cached
 
 
 @dataclasses.dataclass(frozen=True)
@@ -120,7 +122,7 @@ def measure_worlds(x, task, worlds, processes=1):
                   orientation=final[:, 1])
     initial_errors = dict(_offsets(starts, goals), position=initial[:, 0],
                           orientation=initial[:, 1])
-    return WorldMeasures(errors, initial_errors, collisions, contacts)
+    return WorldMeasures(errors, initial_errors, collisions, contacts, final_poses[:, :3])
 
 
 def _offsets(poses, goals):

@@ -1,0 +1,32 @@
+"""tools/final_offsets.py: where a run's best design leaves the object, axis by axis."""
+
+import pathlib
+import re
+import subprocess
+import sys
+
+from hand_codesign.analysis.campaign import final_design
+from hand_codesign.core.measures import (measure_worlds, summarize, Tolerance,
+                                         unseen_world_states)
+from hand_codesign.core.robustness import start_and_goal_poses
+import numpy as np
+
+TOOL = pathlib.Path(__file__).resolve().parents[1] / 'tools' / 'final_offsets.py'
+
+
+def test_shares_along_each_axis_are_the_measures_of_reproduce(real_run):
+    completed = subprocess.run([sys.executable, str(TOOL), str(real_run.bag), '--unseen', '30'],
+                               capture_output=True, text=True, timeout=300)
+    assert completed.returncode == 0, completed.stderr
+    task, x, _ = final_design(real_run.bag)
+    worlds = unseen_world_states(task, 30)
+    measures = measure_worlds(x, task, worlds)
+    printed = dict(re.findall(r'along (\w): within 5 mm ([\d.]+) %', completed.stdout))
+    for axis in 'xy':
+        share = summarize(measures, Tolerance(axis, 0.005)).within
+        assert float(printed[axis]) == round(100 * share, 1)
+    # the final positions the slopes are fitted to are those the errors are measured from
+    _, goals = start_and_goal_poses(task, worlds)
+    np.testing.assert_allclose(
+        np.linalg.norm(measures.final_positions[:, :2] - goals[:, :2], axis=1),
+        measures.errors['plane'], rtol=0, atol=1e-12)
