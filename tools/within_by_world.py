@@ -1,0 +1,76 @@
+"""
+Which unseen worlds a reproduce campaign's designs fail on: the share within its tolerance
+per band of one randomized quantity.
+
+    python tools/within_by_world.py results/levers-task6-reduced levers-task6 \
+        [--quantity scale] [--bands 0.5 0.75 1 1.25 1.5 2] [--seeds 5]
+
+Reads the campaign's cached measures (no simulation): each run's final errors on its unseen
+worlds, which `core.measures.unseen_world_states` draws again from the run's seed and the
+task's ranges. Per configuration, the unseen worlds of its seeds are pooled and split by the
+quantity (core.worlds.QUANTITIES: position_x, position_y, orientation, friction, scale,
+mass) into the bands given; each band gets its worlds and its share within the tolerance.
+"""
+
+import argparse
+import json
+import pathlib
+
+from hand_codesign.core.experiments import EXPERIMENTS, run_key
+from hand_codesign.core.measures import unseen_world_states
+from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.worlds import QUANTITIES
+import numpy as np
+
+
+def pooled_worlds(out, configuration, seeds, quantity, kind):
+    """Return (quantity values, errors) of a configuration's unseen worlds over its seeds."""
+    values, errors = [], []
+    task_file = pathlib.Path(out) / 'tasks' / f'{configuration.key}.yaml'
+    for seed in range(1, seeds + 1):
+        path = pathlib.Path(out) / 'measures' / f'{run_key(configuration, seed)}.json'
+        if not path.exists():
+            continue
+        record = json.loads(path.read_text(encoding='utf-8'))
+        task = load_run_task(task_file, seed, 1, 1, 1)
+        worlds = unseen_world_states(task, record['unseen_worlds'])
+        column = QUANTITIES.index(quantity)
+        values += [world_values(world)[column] for world in worlds]
+        errors += record['worlds']['errors'][kind]
+    return np.array(values), np.array(errors)
+
+
+def world_values(world):
+    """Return a WorldState's seven values in QUANTITIES order."""
+    return (*world.position_delta, world.orientation_delta, world.friction_delta, world.scale,
+            world.mass_factor)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    parser.add_argument('out', help='campaign folder')
+    parser.add_argument('experiment', choices=sorted(EXPERIMENTS))
+    parser.add_argument('--quantity', default='scale', choices=QUANTITIES)
+    parser.add_argument('--bands', type=float, nargs='+', default=[0.5, 0.75, 1, 1.25, 1.5, 2])
+    parser.add_argument('--seeds', type=int, default=5)
+    arguments = parser.parse_args()
+    experiment = EXPERIMENTS[arguments.experiment]
+    tolerance = experiment.tolerance
+    edges = arguments.bands
+    print(f'share within ({tolerance.describe()}) by {arguments.quantity}: '
+          + ' | '.join(f'[{low:g}, {high:g})' for low, high in zip(edges, edges[1:])))
+    for configuration in experiment.configurations:
+        values, errors = pooled_worlds(arguments.out, configuration, arguments.seeds,
+                                       arguments.quantity, tolerance.kind)
+        if not len(errors):
+            continue
+        cells = []
+        for low, high in zip(edges, edges[1:]):
+            band = (values >= low) & (values < high)
+            share = np.mean(errors[band] < tolerance.limit) if band.any() else float('nan')
+            cells.append(f'{100 * share:3.0f} % of {band.sum():4d}')
+        print(f'{configuration.key:24s} ' + ' | '.join(cells))
+
+
+if __name__ == '__main__':
+    main()
