@@ -7,7 +7,9 @@ numbers from the bags.
 """
 
 import csv
+import dataclasses
 import json
+import math
 import os
 import pathlib
 import signal
@@ -25,6 +27,7 @@ from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.measures import (fingers, LIMIT_TOLERANCE, measure_worlds,
                                          resting_on_limit_touching, summarize, Tolerance,
                                          unseen_world_states)
+from hand_codesign.core.rotations import axis_angle_quaternion, compose
 from hand_codesign.core.task import load_task, parse_task
 from hand_codesign.core.worlds import world_states
 import numpy as np
@@ -94,6 +97,25 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
     assert [goal.axes for goal in along_x.goals.position] == [('x',)]
     assert along_x.replace(goals=paper.goals, source_text=paper.source_text) == paper
     assert levers.tolerances() == (Tolerance('plane', 0.005), Tolerance('x', 0.005))
+    # Task 6's hand turned 45 degrees about the vertical, fingers directly opposite, the box's
+    # 90-degree symmetry: nothing else changed
+    task6 = parse_task((experiments.pinned_dir() / 'task6.yaml').read_text())
+    diagonal, = [c for c in experiments.EXPERIMENTS['levers-task6'].configurations
+                 if c.key == 'cma-diagonal']
+    turned = parse_task(experiments.configuration_task_text(
+        diagonal, (experiments.pinned_dir() / diagonal.preset).read_text()))
+    _, palm = compose(((0, 0, 0), axis_angle_quaternion((0, 0, 1), math.pi / 4)),
+                      ((0, 0, 0), task6.hand.base_orientation))
+    np.testing.assert_allclose(turned.hand.base_orientation, palm, atol=1e-7)
+    assert turned.morphology.finger_position_z.values == (0.0,)
+    assert turned.goals.orientation_symmetry.order == 4
+    assert turned.replace(
+        hand=dataclasses.replace(turned.hand, base_orientation=task6.hand.base_orientation),
+        morphology=dataclasses.replace(turned.morphology,
+                                       finger_position_z=task6.morphology.finger_position_z),
+        goals=dataclasses.replace(turned.goals,
+                                  orientation_symmetry=task6.goals.orientation_symmetry),
+        source_text=task6.source_text) == task6
     for name in ('levers-task5', 'levers-task6'):  # quality diversity, its archive's defaults
         mae, = [c for c in experiments.EXPERIMENTS[name].configurations if c.key == 'cma-mae']
         text = (experiments.pinned_dir() / mae.preset).read_text()
