@@ -22,6 +22,7 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK5 = ROOT / 'config' / 'tasks' / 'task5.yaml'
+PINNED_TASK5 = ROOT / 'config' / 'reproduce' / 'task5.yaml'
 SHIFT = np.linspace(0.2, 0.8, 10)
 # every ask/tell optimizer, CMA-ES with restarts (core.restarts) and quality-diversity search
 # (core.quality_diversity) included
@@ -271,7 +272,9 @@ def test_seeded_search_starts_at_the_seed_point():
 
 
 def test_optimized_task5_design_beats_the_initial_mean_on_unseen_worlds():
-    task = load_task(TASK5).replace(seed=1, iterations=15, population=16, num_world_states=8)
+    # the pinned Task 5 (x and y): the preset's own search, scored along x alone, starts
+    # its seed-1 design at this tiny budget in collision with one of these unseen worlds
+    task = load_task(PINNED_TASK5).replace(seed=1, iterations=15, population=16, num_world_states=8)
     spec = genome_spec(task)
     optimizer = make_optimizer(task, spec.size)
     assert isinstance(optimizer, CmaEs) and optimizer.stop() == {}

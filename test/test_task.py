@@ -64,7 +64,9 @@ def test_table_one_values():
 
 def test_goal_axes_and_symmetry():
     task5 = load_task(TASK5)
-    assert task5.goals.position[0].axes == ('x', 'y')
+    assert task5.goals.position[0].axes == ('x',)  # the fingers' axis (issue 12)
+    pinned = load_task(ROOT / 'config' / 'reproduce' / 'task5.yaml')
+    assert pinned.goals.position[0].axes == ('x', 'y')  # as the paper's experiments ran
     assert task5.goals.orientation_symmetry.axis == (0.0, 0.0, 1.0)
     assert task5.goals.orientation_symmetry.order == 4
     assert task5.objective_names == ('position_1', 'orientation_1')

@@ -1,6 +1,5 @@
 """
-Which unseen worlds a reproduce campaign's designs fail on: the share within its tolerance
-per band of one randomized quantity.
+Which unseen worlds a campaign's designs fail on: the share within per band of one quantity.
 
     python tools/within_by_world.py results/levers-task6-reduced levers-task6 \
         [--quantity scale] [--bands 0.5 0.75 1 1.25 1.5 2] [--seeds 5]

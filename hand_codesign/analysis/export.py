@@ -47,8 +47,7 @@ YAML_NAME = 'controller.yaml'
 
 
 def export_command(arguments):
-    """Export the best (or the chosen) design of a bag; return 0, or 1 if re-simulating it
-    differs."""
+    """Export a bag's best (or chosen) design; return 0, or 1 if re-simulating it differs."""
     record = records.open_run(arguments.bag)
     chosen = arguments.candidate
     if chosen is not None and chosen < 0:

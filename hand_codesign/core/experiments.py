@@ -126,8 +126,12 @@ def _lever_configurations(preset):
 
 
 def _preset_lever_configurations(preset, name):
-    """Return a preset changed by the presets' lever (issue 12) searched with the best levers
-    of the paper's preset: plain CMA-ES, resampled worlds and quality diversity."""
+    """
+    Return a preset changed by the presets' lever (issue 12), searched as the paper's preset.
+
+    Plain CMA-ES, and the best levers on the paper's preset: resampled worlds and quality
+    diversity.
+    """
     return (Configuration(f'cma-{name}', preset, 'cma', LEVER_WORLDS, 'torque'),
             Configuration(f'cma-{name}-resample', preset, 'cma', LEVER_WORLDS, 'torque',
                           (('worlds.resample', 'generation'),)),
