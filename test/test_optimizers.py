@@ -274,7 +274,8 @@ def test_seeded_search_starts_at_the_seed_point():
 def test_optimized_task5_design_beats_the_initial_mean_on_unseen_worlds():
     # the pinned Task 5 (x and y): the preset's own search, scored along x alone, starts
     # its seed-1 design at this tiny budget in collision with one of these unseen worlds
-    task = load_task(PINNED_TASK5).replace(seed=1, iterations=15, population=16, num_world_states=8)
+    task = load_task(PINNED_TASK5).replace(seed=1, iterations=15, population=16,
+                                           num_world_states=8)
     spec = genome_spec(task)
     optimizer = make_optimizer(task, spec.size)
     assert isinstance(optimizer, CmaEs) and optimizer.stop() == {}
