@@ -96,7 +96,8 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
         by_key['cma-along-x'], (experiments.pinned_dir() / 'task5_along_x.yaml').read_text()))
     assert [goal.axes for goal in along_x.goals.position] == [('x',)]
     assert along_x.replace(goals=paper.goals, source_text=paper.source_text) == paper
-    assert levers.tolerances() == (Tolerance('plane', 0.005), Tolerance('x', 0.005))
+    assert levers.tolerances() == (Tolerance('plane', 0.005), Tolerance('x', 0.005),
+                                   Tolerance('y', 0.005))
     # Task 6's hand turned 45 degrees about the vertical, fingers directly opposite, the box's
     # 90-degree symmetry: nothing else changed
     task6 = parse_task((experiments.pinned_dir() / 'task6.yaml').read_text())
