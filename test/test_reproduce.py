@@ -357,3 +357,7 @@ def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsy
     assert values['summaries'][0]['median'] == plane.median
     assert values['summaries'][0]['joint_limits_found'] == plane.joint_limits_found
     assert (out / 'unseen.md').read_text().count('| ') >= 4
+    along = {summary['tolerance']['kind']: summary['within'] for summary in values['summaries']}
+    for axis in 'xy':  # where the box ends along each axis of the plane
+        assert along[axis] == summarize(measured, Tolerance(axis, 0.005)).within
+    assert 'error along y < 5 mm' in (out / 'unseen.md').read_text()
