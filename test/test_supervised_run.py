@@ -81,8 +81,14 @@ class Watched:
                 pass
         return None
 
-    def finish(self):
-        self.process.wait(timeout=300)
+    def finish(self, timeout=300):
+        try:
+            self.process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:  # what the run said is what tells why it hung
+            self.process.kill()
+            self.process.wait()
+            self.reader.join(timeout=10)
+            raise AssertionError(f'the run did not end in {timeout} s:\n{self.output()}')
         self.reader.join(timeout=10)
         assert self.process.returncode == 0, self.output()
         return self.output()
