@@ -12,37 +12,26 @@ mass) into the bands given; each band gets its worlds and its share within the t
 """
 
 import argparse
-import json
-import pathlib
 
-from hand_codesign.core.experiments import EXPERIMENTS, run_key
+from hand_codesign.analysis.campaign import load_measures
+from hand_codesign.core.experiments import EXPERIMENTS
 from hand_codesign.core.measures import unseen_world_states
-from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.robustness import world_values
+from hand_codesign.core.task import load_task
 from hand_codesign.core.worlds import QUANTITIES
 import numpy as np
 
 
-def pooled_worlds(out, configuration, seeds, quantity, kind):
+def pooled_worlds(out, configuration, records, quantity, kind):
     """Return (quantity values, errors) of a configuration's unseen worlds over its seeds."""
+    task = load_task(f'{out}/tasks/{configuration.key}.yaml')
+    column = QUANTITIES.index(quantity)
     values, errors = [], []
-    task_file = pathlib.Path(out) / 'tasks' / f'{configuration.key}.yaml'
-    for seed in range(1, seeds + 1):
-        path = pathlib.Path(out) / 'measures' / f'{run_key(configuration, seed)}.json'
-        if not path.exists():
-            continue
-        record = json.loads(path.read_text(encoding='utf-8'))
-        task = load_run_task(task_file, seed, 1, 1, 1)
-        worlds = unseen_world_states(task, record['unseen_worlds'])
-        column = QUANTITIES.index(quantity)
+    for record in records:
+        worlds = unseen_world_states(task.replace(seed=record['seed']), record['unseen_worlds'])
         values += [world_values(world)[column] for world in worlds]
         errors += record['worlds']['errors'][kind]
     return np.array(values), np.array(errors)
-
-
-def world_values(world):
-    """Return a WorldState's seven values in QUANTITIES order."""
-    return (*world.position_delta, world.orientation_delta, world.friction_delta, world.scale,
-            world.mass_factor)
 
 
 def main():
@@ -58,9 +47,11 @@ def main():
     edges = arguments.bands
     print(f'share within ({tolerance.describe()}) by {arguments.quantity}: '
           + ' | '.join(f'[{low:g}, {high:g})' for low, high in zip(edges, edges[1:])))
+    measured = load_measures(arguments.out, experiment, arguments.seeds)
     for configuration in experiment.configurations:
-        values, errors = pooled_worlds(arguments.out, configuration, arguments.seeds,
-                                       arguments.quantity, tolerance.kind)
+        values, errors = pooled_worlds(arguments.out, configuration,
+                                       measured[configuration.key], arguments.quantity,
+                                       tolerance.kind)
         if not len(errors):
             continue
         cells = []

@@ -187,11 +187,9 @@ def pooled_row(measured, tolerance):
     initial = np.concatenate([record['worlds']['initial_errors'][kind] for record in measured])
     summaries = [DesignMeasures.from_dict(record['summary']) for record in measured]
     found = sum(summary.joint_limits_found for summary in summaries)
+    within, within_by_seed = shares_within(measured, tolerance)
     return {'seeds': len(measured), 'worlds': int(len(errors)),
-            'within': float(np.mean(errors < tolerance.limit)),
-            'within_by_seed': tuple(
-                float(np.mean(np.asarray(record['worlds']['errors'][kind]) < tolerance.limit))
-                for record in measured),
+            'within': within, 'within_by_seed': within_by_seed,
             'median': float(np.median(errors)), 'p90': float(np.percentile(errors, 90)),
             'initial_median': float(np.median(initial)),
             'joint_limits_found': found,
@@ -394,13 +392,21 @@ def configuration_rows(experiment, budget, measured):
     return rows
 
 
+def shares_within(measured, tolerance):
+    """Return (pooled share, shares by seed) of the runs' unseen worlds within a tolerance."""
+    by_seed = [np.asarray(record['worlds']['errors'][tolerance.kind]) < tolerance.limit
+               for record in measured]
+    return (float(np.mean(np.concatenate(by_seed))),
+            tuple(float(np.mean(within)) for within in by_seed))
+
+
 def also_columns(measured, tolerances):
     """Return {column: value}: the pooled share within each further tolerance, and by seed."""
     columns = {}
     for tolerance in tolerances:
-        row = pooled_row(measured, tolerance)
-        columns[also_column(tolerance)] = row['within']
-        columns[also_column(tolerance) + '_by_seed'] = row['within_by_seed']
+        pooled, by_seed = shares_within(measured, tolerance)
+        columns[also_column(tolerance)] = pooled
+        columns[also_column(tolerance) + '_by_seed'] = by_seed
     return columns
 
 
