@@ -28,7 +28,6 @@ from analysis_run import TASK
 from hand_codesign.analysis.bag import read_run
 import psutil
 import pytest
-import rclpy
 from rosbags.rosbag2 import Reader
 from test_system import free_domain
 from test_system import ROOT
@@ -94,36 +93,25 @@ class Watched:
         return self.output()
 
 
-def node_names_during(run, domain, wanted):
-    """Return the ROS node names seen on domain while run goes on, until wanted are seen."""
-    context = rclpy.Context()
-    rclpy.init(context=context, domain_id=domain)
-    seen = set()
-    try:
-        observer = rclpy.create_node('observer', context=context)
-        while not wanted <= seen and run.process.poll() is None:
-            seen.update(observer.get_node_names())
-            time.sleep(0.1)
-        observer.destroy_node()
-    finally:
-        rclpy.shutdown(context=context)
-    return seen
+def node_name_in_log(log):
+    """Return the node name an evaluator's log shows in its first line, '[LEVEL] [name]: ...'."""
+    return log.read_text().split('] [', 1)[1].split(']', 1)[0]
 
 
 def test_evaluator_killed_during_start_up(clean_run, tmp_path):
-    bag, domain = tmp_path / 'start-up', free_domain()
-    run = Watched(bag, 2, extra=['--domain-id', str(domain)])
+    bag = tmp_path / 'start-up'
+    run = Watched(bag, 2)
     victim = run.wait_for(lambda: run.child('evaluator_id:=evaluator-1 '))
     victim.send_signal(signal.SIGKILL)   # the run is still waiting for its evaluators
-    # every evaluator of the run has a node name of its own, the restarted one too
-    wanted = {'evaluator_0', 'evaluator_1_r1', 'optimizer', 'recorder'}
-    names = node_names_during(run, domain, wanted)
     output = run.finish()
-    assert wanted <= names, names
     assert 'evaluator-1 exited (code -9); restarting it' in output
     assert 'evaluators ready, starting' in output
     assert summaries(bag) == summaries(clean_run)
-    assert (bag / 'logs' / 'evaluator-1-r1.log').exists()
+    # every evaluator of the run has a node name of its own, the restarted one too (the run is
+    # too short for a graph observer to see each node reliably; each node's log names it)
+    logs = bag / 'logs'
+    assert node_name_in_log(logs / 'evaluator-0.log') == 'evaluator_0'
+    assert node_name_in_log(logs / 'evaluator-1-r1.log') == 'evaluator_1_r1'
 
 
 def test_recorder_killed_mid_run(clean_run, tmp_path):
