@@ -483,25 +483,35 @@ def write_results(out, experiment, budget, seeds):
     return paths
 
 
-UNSEEN_TOLERANCES = (('plane', 0.005), ('position', 0.005), ('orientation', 0.1))
-AXIS_TOLERANCES = (('x', 0.005), ('y', 0.005))  # for a task with a position goal
+POSITION_TOLERANCES = (('plane', 0.005), ('position', 0.005), ('x', 0.005), ('y', 0.005))
+ORIENTATION_TOLERANCES = (('orientation', 0.1),)
+
+
+def unseen_tolerances(task):
+    """
+    Return the (error kind, limit) pairs that `analyze --unseen` reports for a task.
+
+    Only the errors of the goals the task has: without a position goal the box's distance
+    from its start would read as an error ("final position irrelevant", Task 6).
+    """
+    return ((POSITION_TOLERANCES if task.goals.position else ())
+            + (ORIENTATION_TOLERANCES if task.goals.orientation else ()))
 
 
 def unseen_report(bag, count, processes=1):
     """
     Return (Markdown lines, JSON record) of a run's best design on `count` unseen worlds.
 
-    The same measures as a reproduce campaign's: for each error (plane, position,
-    orientation, and for a task with a position goal the offsets along x and y) the share of
-    worlds within 5 mm or 0.1 rad, its median and p90, and whether the design rests on a
-    joint limit while touching the object in at least half of the worlds (joint limits
-    found).
+    The same measures as a reproduce campaign's: for each error of the task's goals
+    (unseen_tolerances) the share of worlds within 5 mm or 0.1 rad, its median and p90, and
+    whether the design rests on a joint limit while touching the object in at least half of
+    the worlds (joint limits found).
     """
     from hand_codesign.core.measures import Tolerance
     task, x, structure = final_design(bag)
     measures = measure_worlds(x, task, unseen_world_states(task, count), processes)
-    kinds = UNSEEN_TOLERANCES + (AXIS_TOLERANCES if task.goals.position else ())
-    summaries = [summarize(measures, Tolerance(kind, limit)) for kind, limit in kinds]
+    summaries = [summarize(measures, Tolerance(kind, limit))
+                 for kind, limit in unseen_tolerances(task)]
     lines = [f'## On {count} unseen worlds', '',
              f'The best design (structure {list(structure)}) on {count} worlds drawn from '
              f'another stream of seed {task.seed} than the training worlds.', '',
