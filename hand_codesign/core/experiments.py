@@ -24,7 +24,8 @@ worlds). They run from the same pinned presets and are not part of `all`. Both a
 presets' lever, a preset choice of ours revisited: Task 5 scored along the fingers' axis
 alone (`task5_along_x.yaml`; its tables give the shares within 5 mm along x and along y
 beside the share in the plane for every configuration) and Task 6's hand turned to squeeze
-along the goal's diagonal (`task6_diagonal.yaml`).
+along the goal's diagonal (`task6_diagonal.yaml`), which `levers-task6` also runs with other
+choices of its preset changed (gravity compensation, finger friction, torque bound).
 """
 
 import dataclasses
