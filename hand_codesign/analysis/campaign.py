@@ -26,7 +26,9 @@ import pathlib
 
 from hand_codesign.analysis import records
 from hand_codesign.analysis.report import Generations, generations_from_summaries, write_csv
-from hand_codesign.core.experiments import run_key, training_worlds
+from hand_codesign.core.experiments import (ALONG_X_5MM, ALONG_Y_5MM, ORIENTATION_01,
+                                            PLANE_5MM, POSITION_5MM, run_key,
+                                            training_worlds)
 from hand_codesign.core.measures import (DesignMeasures, measure_worlds, summarize,
                                          unseen_world_states, WorldMeasures)
 from hand_codesign.errors import UserError
@@ -483,19 +485,15 @@ def write_results(out, experiment, budget, seeds):
     return paths
 
 
-POSITION_TOLERANCES = (('plane', 0.005), ('position', 0.005), ('x', 0.005), ('y', 0.005))
-ORIENTATION_TOLERANCES = (('orientation', 0.1),)
-
-
 def unseen_tolerances(task):
     """
-    Return the (error kind, limit) pairs that `analyze --unseen` reports for a task.
+    Return the Tolerances that `analyze --unseen` reports for a task, those of reproduce.
 
     Only the errors of the goals the task has: without a position goal the box's distance
     from its start would read as an error ("final position irrelevant", Task 6).
     """
-    return ((POSITION_TOLERANCES if task.goals.position else ())
-            + (ORIENTATION_TOLERANCES if task.goals.orientation else ()))
+    position = (PLANE_5MM, POSITION_5MM, ALONG_X_5MM, ALONG_Y_5MM) if task.goals.position else ()
+    return position + ((ORIENTATION_01,) if task.goals.orientation else ())
 
 
 def unseen_report(bag, count, processes=1):
@@ -507,11 +505,9 @@ def unseen_report(bag, count, processes=1):
     whether the design rests on a joint limit while touching the object in at least half of
     the worlds (joint limits found).
     """
-    from hand_codesign.core.measures import Tolerance
     task, x, structure = final_design(bag)
     measures = measure_worlds(x, task, unseen_world_states(task, count), processes)
-    summaries = [summarize(measures, Tolerance(kind, limit))
-                 for kind, limit in unseen_tolerances(task)]
+    summaries = [summarize(measures, tolerance) for tolerance in unseen_tolerances(task)]
     lines = [f'## On {count} unseen worlds', '',
              f'The best design (structure {list(structure)}) on {count} worlds drawn from '
              f'another stream of seed {task.seed} than the training worlds.', '',

@@ -170,6 +170,7 @@ def _lever_budgets(paper_worlds):
 
 LEVER_WORLDS = 16
 PLANE_5MM = Tolerance('plane', 0.005)
+POSITION_5MM = Tolerance('position', 0.005)
 ALONG_X_5MM = Tolerance('x', 0.005)
 ALONG_Y_5MM = Tolerance('y', 0.005)
 ORIENTATION_01 = Tolerance('orientation', 0.1)
