@@ -116,7 +116,7 @@ def main():
           f'({audits} audit evaluations not counted)')
     target = 0.95 if arguments.popsize * arguments.world_states >= 80 * 64 else 0.90
     print(f'  2 evaluators / (2 x raw)   {two / (2 * raw):.3f}   (target >= {target:.2f})')
-    print(f'  2 evaluators / (2 raw at once) {two / raw_two:.3f}   (this machine\'s ceiling: 1)')
+    print(f'  2 evaluators / (2 raw at once) {two / raw_two:.3f}   (ceiling of two processes: 1)')
     print(f'  2 evaluators / 1 evaluator {two / one:.3f}   (target >= 1.8)')
 
 

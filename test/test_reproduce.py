@@ -25,8 +25,8 @@ from hand_codesign.core import experiments
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.measures import (fingers, LIMIT_TOLERANCE, measure_worlds,
-                                         resting_on_limit_touching, summarize, Tolerance,
-                                         unseen_world_states)
+                                         resting_on_limit_touching, shares_in_bands, summarize,
+                                         Tolerance, unseen_world_states)
 from hand_codesign.core.rotations import axis_angle_quaternion, compose
 from hand_codesign.core.task import load_task, parse_task
 from hand_codesign.core.worlds import world_states
@@ -354,6 +354,22 @@ def test_analyze_reports_only_the_errors_of_the_tasks_goals():
     assert kinds == ['plane', 'position', 'x', 'y', 'orientation']
 
 
+def test_bands_are_scored_on_the_error_the_tasks_goal_measures():
+    def scored(folder, name):
+        return campaign.scored_tolerance(load_task(ROOT / 'config' / folder / name)).kind
+    assert scored('tasks', 'task5.yaml') == 'x'  # the presets score along the fingers' axis
+    assert scored('reproduce', 'task5.yaml') == 'plane'
+    assert scored('tasks', 'task6.yaml') == 'orientation'
+
+
+def test_shares_in_bands_take_every_world_once():
+    values = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+    within = np.array([True, False, True, True, False])
+    bands = shares_in_bands(values, within, [0.0, 0.5, 1.0])
+    assert bands == [(0.0, 0.5, 2, 0.5), (0.5, 1.0, 3, 2 / 3)]
+    assert shares_in_bands(values, within, [2.0, 3.0]) == [(2.0, 3.0, 0, None)]
+
+
 def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsys):
     out = tmp_path / 'report'
     assert cli.main(['analyze', str(real_run.bag), '--out', str(out), '--unseen', '20']) == 0
@@ -371,3 +387,18 @@ def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsy
     for axis in 'xy':  # where the box ends along each axis of the plane
         assert along[axis] == summarize(measured, Tolerance(axis, 0.005)).within
     assert 'error along y < 5 mm' in (out / 'unseen.md').read_text()
+    # where in each randomized range the design fails: bands of the error the task scores
+    bands = values['bands']
+    scored = Tolerance(**bands['tolerance'])
+    assert scored == campaign.scored_tolerance(task)
+    within = measured.errors[scored.kind] < scored.limit
+    scales = np.array([world.scale for world in unseen_world_states(task, 20)])
+    lower, upper = task.randomization.scale.lower, task.randomization.scale.upper
+    edges = np.linspace(lower, upper, campaign.BANDS + 1)
+    for (low, high, count, share), band_low, band_high in zip(
+            bands['quantities']['scale'], edges, edges[1:]):
+        inside = (scales >= band_low) & (scales <= band_high)
+        assert (low, high, count) == (band_low, band_high, int(inside.sum()))
+        assert share == (np.mean(within[inside]) if count else None)
+    assert sum(count for _, _, count, _ in bands['quantities']['scale']) == 20
+    assert '| scale |' in printed

@@ -15,7 +15,7 @@ import argparse
 
 from hand_codesign.analysis.campaign import load_measures
 from hand_codesign.core.experiments import EXPERIMENTS
-from hand_codesign.core.measures import unseen_world_states
+from hand_codesign.core.measures import shares_in_bands, unseen_world_states
 from hand_codesign.core.robustness import world_values
 from hand_codesign.core.task import load_task
 from hand_codesign.core.worlds import QUANTITIES
@@ -54,11 +54,9 @@ def main():
                                        tolerance.kind)
         if not len(errors):
             continue
-        cells = []
-        for low, high in zip(edges, edges[1:]):
-            band = (values >= low) & (values < high)
-            share = np.mean(errors[band] < tolerance.limit) if band.any() else float('nan')
-            cells.append(f'{100 * share:3.0f} % of {band.sum():4d}')
+        cells = [f'{100 * share:3.0f} % of {worlds:4d}' if worlds else f'  - % of {worlds:4d}'
+                 for _, _, worlds, share in shares_in_bands(values, errors < tolerance.limit,
+                                                            edges)]
         print(f'{configuration.key:24s} ' + ' | '.join(cells))
 
 

@@ -21,6 +21,7 @@ seeds whose design rests on a joint limit while touching the box in at least hal
 worlds.
 """
 
+import dataclasses
 import json
 import pathlib
 
@@ -29,12 +30,15 @@ from hand_codesign.analysis.report import Generations, generations_from_summarie
 from hand_codesign.core.experiments import (ALONG_X_5MM, ALONG_Y_5MM, ORIENTATION_01,
                                             PLANE_5MM, POSITION_5MM, run_key,
                                             training_worlds)
-from hand_codesign.core.measures import (DesignMeasures, measure_worlds, summarize,
-                                         unseen_world_states, WorldMeasures)
+from hand_codesign.core.measures import (DesignMeasures, measure_worlds, shares_in_bands,
+                                         summarize, unseen_world_states, WorldMeasures)
+from hand_codesign.core.robustness import world_values
+from hand_codesign.core.worlds import QUANTITIES
 from hand_codesign.errors import UserError
 import numpy as np
 
 RESUME_MARK = '.resume'
+BANDS = 3  # bands of each randomized quantity's range in `analyze --unseen`
 
 
 def attempts(runs_dir, key):
@@ -496,6 +500,49 @@ def unseen_tolerances(task):
     return position + ((ORIENTATION_01,) if task.goals.orientation else ())
 
 
+def scored_tolerance(task):
+    """
+    Return the Tolerance of the error the task's goals score, for its bands by world.
+
+    The last position goal's: along x or y when it measures one axis of the plane (the Task
+    5 presets), else in the plane; without a position goal the orientation's.
+    """
+    if not task.goals.position:
+        return ORIENTATION_01
+    axes = set(task.goals.position[-1].axes) - {'z'}
+    return {frozenset('x'): ALONG_X_5MM, frozenset('y'): ALONG_Y_5MM}.get(frozenset(axes),
+                                                                          PLANE_5MM)
+
+
+def world_bands(task, worlds, measures, tolerance, bands=BANDS):
+    """
+    Return {quantity: [(low, high, worlds, share within)]} over each randomized quantity.
+
+    The range of each quantity the task randomizes is cut into `bands` of equal width: the
+    shares tell where in that range the design fails (Task 6: the smallest boxes).
+    """
+    within = measures.errors[tolerance.kind] < tolerance.limit
+    values = np.array([world_values(world) for world in worlds]).reshape(len(worlds), -1)
+    return {name: shares_in_bands(values[:, QUANTITIES.index(name)], within,
+                                  np.linspace(bounds.lower, bounds.upper, bands + 1))
+            for name, bounds in task.randomization.quantities() if bounds.width > 0}
+
+
+def band_lines(bands, tolerance):
+    """Return the Markdown table of world_bands' shares, a row per quantity."""
+    count = max((len(row) for row in bands.values()), default=0)
+    lines = [f'Share of the worlds with {tolerance.describe()}, by where each randomized '
+             f'quantity fell in its range ({count} bands of equal width, SI units; worlds in '
+             'brackets):', '',
+             '| quantity | ' + ' | '.join(f'band {index + 1}' for index in range(count)) + ' |',
+             '|---|' + '---|' * count]
+    for name, row in bands.items():
+        lines.append(f'| {name} | ' + ' | '.join(
+            f'[{low:.3g}, {high:.3g}]: {percent(share) if worlds else "-"} ({worlds})'
+            for low, high, worlds, share in row) + ' |')
+    return lines
+
+
 def unseen_report(bag, count, processes=1):
     """
     Return (Markdown lines, JSON record) of a run's best design on `count` unseen worlds.
@@ -506,7 +553,8 @@ def unseen_report(bag, count, processes=1):
     the worlds (joint limits found).
     """
     task, x, structure = final_design(bag)
-    measures = measure_worlds(x, task, unseen_world_states(task, count), processes)
+    worlds = unseen_world_states(task, count)
+    measures = measure_worlds(x, task, worlds, processes)
     summaries = [summarize(measures, tolerance) for tolerance in unseen_tolerances(task)]
     lines = [f'## On {count} unseen worlds', '',
              f'The best design (structure {list(structure)}) on {count} worlds drawn from '
@@ -522,7 +570,11 @@ def unseen_report(bag, count, processes=1):
     lines += ['', f'Resting on a joint limit while touching the object: '
                   f'{percent(first.limit_contact_share)} of the worlds; joint limits found '
                   f'(at least half): {"yes" if first.joint_limits_found else "no"}. Start '
-                  f'collisions: {percent(first.collision_share)} of the worlds.']
+                  f'collisions: {percent(first.collision_share)} of the worlds.', '']
+    scored = scored_tolerance(task)
+    bands = world_bands(task, worlds, measures, scored)
+    lines += band_lines(bands, scored)
     record = {'bag': str(bag), 'seed': task.seed, 'unseen_worlds': count,
-              'summaries': [summary.as_dict() for summary in summaries]}
+              'summaries': [summary.as_dict() for summary in summaries],
+              'bands': {'tolerance': dataclasses.asdict(scored), 'quantities': bands}}
     return lines, record

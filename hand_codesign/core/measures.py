@@ -149,6 +149,24 @@ def summarize(measures: WorldMeasures, tolerance: Tolerance):
         collision_share=float(np.mean(measures.collisions)))
 
 
+def shares_in_bands(values, within, edges):
+    """
+    Return [(low, high, worlds, share within)] of the worlds in each band [low, high).
+
+    values: one value of a world quantity per world; within: whether each world ended within
+    a tolerance; edges: increasing band edges. The last band includes its upper edge, so
+    edges spanning a quantity's range take every world. A band without worlds has share None.
+    """
+    values, within = np.asarray(values), np.asarray(within, dtype=bool)
+    bands = []
+    for index, (low, high) in enumerate(zip(edges, edges[1:])):
+        last = index == len(edges) - 2
+        inside = (values >= low) & ((values <= high) if last else (values < high))
+        share = float(np.mean(within[inside])) if inside.any() else None
+        bands.append((float(low), float(high), int(inside.sum()), share))
+    return bands
+
+
 def measure_design(x, task, tolerance, count, processes=1):
     """Return the DesignMeasures of genome x on `count` unseen worlds of the task."""
     return summarize(measure_worlds(x, task, unseen_world_states(task, count), processes),
