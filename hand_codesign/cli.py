@@ -106,6 +106,9 @@ def add_reproduce_arguments(parser):
                         help='evaluator processes per run (default 2)')
     parser.add_argument('--out', help='campaign folder (default results/EXPERIMENT-BUDGET); '
                                       'give the same folder again to continue')
+    parser.add_argument('--only', nargs='+', metavar='CONFIGURATION',
+                        help="run only these of the experiment's configurations (the first "
+                             'column of its table); the tables show every one measured')
 
 
 def add_bag_arguments(verb, parser):

@@ -224,15 +224,15 @@ TINY = """
         Tolerance('plane', 0.005), {'smoke': Budget('smoke', 20, 4, 12, 1)},
         also=(Tolerance('x', 0.005),))
     sys.exit(main(['reproduce', 'tiny', '--budget', 'smoke', '--evaluators', '1',
-                   '--out', sys.argv[1]]))
+                   '--out', sys.argv[1]] + sys.argv[2:]))
 """
 
 
-def start_tiny(script, out, background=False):
+def start_tiny(script, out, *options, background=False):
     # a session of its own, as a campaign started from a shell: SIGINT reaches it alone, and
     # nothing pytest's process did to its own signal state is inherited; in the background
     # (`nohup ... &` from a script) it and its children ignore SIGINT
-    return subprocess.Popen([sys.executable, str(script), str(out)], cwd=ROOT,
+    return subprocess.Popen([sys.executable, str(script), str(out), *options], cwd=ROOT,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env=dict(os.environ), start_new_session=True,
                             preexec_fn=ignore_interrupts if background else unblock_interrupts)
@@ -331,17 +331,25 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
     assert 'within (error along x < 5 mm)' in (out / 'tiny.md').read_text()
     assert (out / 'tiny.png').stat().st_size > 0
 
-    # measures cached before an error kind the tables need existed are measured again
+    # measures cached before an error kind the tables need existed are measured again; --only
+    # takes one configuration, and the tables keep every configuration measured
     cached = out / 'measures' / 'torque-cma-2w-seed1.json'
     values = json.loads(cached.read_text())
     del values['worlds']['errors']['x']
     cached.write_text(json.dumps(values))
-    third = start_tiny(script, out)
+    third = start_tiny(script, out, '--only', 'torque-cma-2w')
     output, _ = third.communicate(timeout=300)
     assert third.returncode == 0, output
-    assert 'torque-cma-2w-seed1 (finished: measuring)' in output
-    assert 'torque-mocma-16w-seed1 (finished and measured: kept)' in output
+    assert 'run 1 of 1: torque-cma-2w-seed1 (finished: measuring)' in output
+    assert 'torque-mocma-16w' not in output.split('reproduce: tiny (')[0]
     assert 'x' in json.loads(cached.read_text())['worlds']['errors']
+    assert (out / 'tiny.md').read_text().count('| torque-') == 2
+
+
+def test_only_names_configurations_of_the_experiment(capsys):
+    assert cli.main(['reproduce', 'levers-task6', '--only', 'cma-diagonal', 'nope']) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count('\n') == 0 and 'nope' in error and 'cma-diagonal-gravity' in error
 
 
 def test_analyze_reports_only_the_errors_of_the_tasks_goals():

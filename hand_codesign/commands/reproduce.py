@@ -1,11 +1,13 @@
 """
-`hand-codesign reproduce EXPERIMENT [--budget B] [--seeds N] [--evaluators E] [--out DIR]`.
+`hand-codesign reproduce EXPERIMENT [--budget B] [--seeds N] [--evaluators E] [--out DIR]
+[--only CONFIGURATION ...]`.
 
 Runs one of the paper's experiments (core.experiments; `reproduce --list` names them) as a
 campaign: every configuration once per seed 1..N, each a normal `hand-codesign run` with its
 own bag under DIR/runs/, then measures every final design on worlds it never trained on
 (core.measures) and writes the experiment's tables (`.csv`, `.md`, a row per configuration)
-and figures into DIR (layout: hand_codesign.analysis.campaign).
+and figures into DIR (layout: hand_codesign.analysis.campaign). `--only` runs some of the
+experiment's configurations: a new lever beside a campaign that already measured the others.
 
 Interrupted (Ctrl-C, SIGTERM, a reboot), the same command continues: finished runs are kept,
 the interrupted run is resumed from its bag (`hand-codesign run --resume`, into a new bag
@@ -48,7 +50,8 @@ def reproduce_command(arguments):
     check_arguments(arguments)
     out = pathlib.Path(arguments.out or f'results/{arguments.experiment}-{arguments.budget}')
     campaigns = [Campaign(experiment, arguments.budget, arguments.seeds,
-                          out if len(chosen) == 1 else out / experiment.name)
+                          out if len(chosen) == 1 else out / experiment.name,
+                          chosen_configurations(experiment, arguments.only))
                  for experiment in chosen]
     for item in campaigns:
         item.prepare()
@@ -80,6 +83,18 @@ def chosen_experiments(name):
         raise UserError(f'unknown experiment "{name}"; expected one of '
                         f'{", ".join(experiments.experiment_names())}')
     return [experiments.EXPERIMENTS[name]]
+
+
+def chosen_configurations(experiment, keys):
+    """Return the configurations of an experiment named by keys (None: all); or UserError."""
+    if keys is None:
+        return experiment.configurations
+    known = {configuration.key: configuration for configuration in experiment.configurations}
+    unknown = [key for key in keys if key not in known]
+    if unknown:
+        raise UserError(f'--only: {experiment.name} has no configuration '
+                        f'{", ".join(unknown)}; expected some of {", ".join(known)}')
+    return [known[key] for key in dict.fromkeys(keys)]
 
 
 def check_arguments(arguments):
@@ -158,13 +173,14 @@ def format_duration(seconds):
 class Campaign:
     """One experiment's campaign in its folder: its runs, measures and tables."""
 
-    def __init__(self, experiment, budget_name, seeds, out):
+    def __init__(self, experiment, budget_name, seeds, out, configurations=None):
         self.experiment = experiment
         self.budget = experiment.budget(budget_name)
         self.seeds = seeds or self.budget.seeds
         self.out = pathlib.Path(out)
         self.runs_dir = self.out / 'runs'
-        self.runs = [(configuration, seed) for configuration in experiment.configurations
+        self.runs = [(configuration, seed)
+                     for configuration in configurations or experiment.configurations
                      for seed in range(1, self.seeds + 1)]
 
     # ---------------------------------------------------------------- setup
