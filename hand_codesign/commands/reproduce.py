@@ -1,6 +1,5 @@
 """
-`hand-codesign reproduce EXPERIMENT [--budget B] [--seeds N] [--evaluators E] [--out DIR]
-[--only CONFIGURATION ...]`.
+`hand-codesign reproduce EXPERIMENT [--budget B] [--seeds N] [--evaluators E] [--out DIR]`.
 
 Runs one of the paper's experiments (core.experiments; `reproduce --list` names them) as a
 campaign: every configuration once per seed 1..N, each a normal `hand-codesign run` with its
