@@ -57,6 +57,7 @@ class EvaluatorNode(Node):
                                     credential=self.key)
         self.work = collections.deque()  # candidates taken; the first is being evaluated
         self.done, self.steps_per_second = 0, 0.0
+        self.messages_taken = 0  # RunInfos and Candidates heard, to take all that arrived
         # the first heartbeat goes out the moment the subscribers match, not a period later
         matched = PublisherEventCallbacks(matched=lambda status: self.publish_status())
         self.evaluations, self.status = (self.create_publisher(
@@ -77,19 +78,31 @@ class EvaluatorNode(Node):
             if self.work:
                 self.work_off()
             else:
-                executor.spin_once(timeout_sec=IDLE_WAIT)
+                self.take_arrived(IDLE_WAIT)
 
     def poll(self, *_):
         """Let the executor handle what arrived meanwhile, at most every POLL_PERIOD."""
         now = time.monotonic()
         if now - self.last_poll >= POLL_PERIOD:
             self.last_poll = now
+            self.take_arrived(0.0)
+
+    def take_arrived(self, timeout):
+        """Take every message that arrived (waiting up to timeout s for the first one)."""
+        # spin_once runs one callback: one at a time, the candidates addressed to the other
+        # evaluators kept this one's next candidate waiting until it had run dry
+        taken = self.messages_taken
+        self.executor.spin_once(timeout_sec=timeout)
+        while self.messages_taken > taken:
+            taken = self.messages_taken
             self.executor.spin_once(timeout_sec=0.0)
 
     def on_run_info(self, message):
+        self.messages_taken += 1
         self.work.extend(self.inbox.run_announced(message))
 
     def on_candidate(self, message):
+        self.messages_taken += 1
         self.work.extend(self.inbox.candidate_arrived(message))
 
     def work_off(self):
@@ -100,9 +113,9 @@ class EvaluatorNode(Node):
         self.evaluations.publish(sign_evaluation(self.key, answer))
         self.work.popleft()
         self.done += 1
+        self.take_arrived(0.0)
         if not self.work:  # idle: say so (and the final count) now, not at the next beat
             self.publish_status()
-        self.poll()
 
     def answer(self, message):
         """Return the Evaluation answering a candidate: its objectives, or a rejection."""
