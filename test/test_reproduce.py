@@ -24,9 +24,9 @@ from hand_codesign.commands import reproduce
 from hand_codesign.core import experiments
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.measures import (fingers, LIMIT_TOLERANCE, measure_worlds,
-                                         resting_on_limit_touching, summarize, Tolerance,
+from hand_codesign.core.measures import (measure_worlds, summarize, Tolerance,
                                          unseen_world_states)
+from hand_codesign.core.outcomes import fingers, LIMIT_TOLERANCE, resting_on_limit_touching
 from hand_codesign.core.rotations import axis_angle_quaternion, compose
 from hand_codesign.core.task import load_task, parse_task
 from hand_codesign.core.worlds import world_states
