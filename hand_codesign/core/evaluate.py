@@ -85,6 +85,7 @@ class _TaskContext:
         self.task = task
         self.spec = None
         self.schedule = goal_schedule(task)
+        self.outcome_names = task_outcomes(task)  # () unless its archive names some
         self.default_worlds = None
         self.worlds = {}  # tuple of WorldStates -> (object states, initial errors)
 
@@ -152,7 +153,7 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     objects = [(state, object_shape(simulator.client, state, task.object_spec.shape))
                for state in states]
     num_objectives = schedule.num_objectives
-    watch = OutcomeWatch(task_outcomes(task), len(states))
+    watch = OutcomeWatch(context.outcome_names, len(states))
     if simulator.start_collisions(objects):
         world_values = np.full((len(states), num_objectives), COLLISION_PENALTY)
         starts = np.array([(*state.position, *state.orientation) for state in states],
