@@ -3,6 +3,7 @@
 from hand_codesign.core.audits import Audits
 from hand_codesign.core.audits import drawn
 from hand_codesign.core.controller import RunController
+from hand_codesign.core.outcomes import Answer
 import numpy as np
 import pytest
 from test_controller import Clock
@@ -225,3 +226,14 @@ def test_an_audit_no_other_live_evaluator_can_do_is_taken_unaudited():
     expected = plain_loop(task).best[0]
     assert outbox.result['best_candidate_id'] == expected.candidate_id
     assert any('no other evaluator alive to audit' in text for _, text in outbox.lines)
+
+
+def test_an_auditor_that_differs_only_in_outcomes_disagrees_and_the_first_answer_is_taken():
+    audits = Audits(seed=1, fraction=0.1)
+    honest = Answer.of([0.1, 0.2], ('limit_rest',), [0.5])
+    first = audits.take(7, 'a', honest, True)  # a's first answer: audited on probation
+    assert first.value is None and first.exclude == {'a'}
+    second = audits.take(7, 'liar', Answer.of([0.1, 0.2], ('limit_rest',), [1.0]), True)
+    assert second.value is None and second.exclude == {'a', 'liar'}
+    third = audits.take(7, 'b', Answer.of([0.1, 0.2], ('limit_rest',), [0.5]), True)
+    assert third.value is honest and third.liars == ['liar']

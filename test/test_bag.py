@@ -5,14 +5,21 @@ from bag_samples import interleaved
 from bag_samples import sample_messages
 from bag_samples import TASK_YAML
 from bag_samples import write_bag
+from hand_codesign.analysis import cdr
+from hand_codesign.analysis import records
 from hand_codesign.analysis.bag import BagError
 from hand_codesign.analysis.bag import read_run
+from hand_codesign.core.contract import EVALUATION_TYPE
 from hand_codesign.ros import topics
 from hand_codesign.ros.mcap_writer import BagWriter
+from hand_codesign.ros.mcap_writer import message_definition
 from mcap.reader import make_reader
+from mcap.writer import Writer
+from mcap_ros2.decoder import DecoderFactory
 import numpy as np
 import pytest
 from rclpy.serialization import serialize_message
+from rosbags.highlevel import AnyReader
 from std_msgs.msg import String
 
 
@@ -202,3 +209,78 @@ def test_a_damaged_chunk_is_skipped_and_the_rest_is_read(tmp_path):
     assert sum(record.message_counts.values()) == total - 10
     assert len(record.candidates) + len(record.evaluations) < 2 * 80
     assert record.run_info.seed == 4
+
+
+def write_bag_before_outcomes(path, messages_by_topic):
+    """
+    Write a bag as recorders did before Evaluation had outcome_names and outcomes.
+
+    mcap's own writer, the Evaluation schema cut before those fields, and each Evaluation's
+    bytes cut where that schema's fields end (padded to 4 bytes, as DDS sends them).
+    """
+    current = message_definition(EVALUATION_TYPE)
+    older = current[:current.index('string[] outcome_names')]
+    fields_end = cdr.compile_schema(EVALUATION_TYPE, older).message_end
+    with open(path, 'wb') as stream:
+        writer = Writer(stream)
+        writer.start(profile='ros2', library='test')
+        channels = {}
+        for topic, messages in messages_by_topic.items():
+            type_name = topics.type_name(topics.MESSAGE_TYPES[topic])
+            text = older if type_name == EVALUATION_TYPE else message_definition(type_name)
+            schema = writer.register_schema(type_name, 'ros2msg', text.encode())
+            channels[topic] = writer.register_channel('/' + topic, 'cdr', schema)
+        for index, (topic, message) in enumerate(interleaved(messages_by_topic)):
+            data = dds_bytes(message)
+            if topic == topics.EVALUATIONS:
+                end = fields_end(data)
+                data = data[:4 + ((end - 4 + 3) & ~3)]
+            writer.add_message(channels[topic], log_time=1_000_000 + index, data=data,
+                               publish_time=1_000_000 + index)
+        writer.finish()
+
+
+def test_a_bag_from_before_outcomes_reads_with_them_empty(tmp_path):
+    messages = sample_messages(generations=2, population=6)
+    old, new = tmp_path / 'old.mcap', tmp_path / 'new.mcap'
+    write_bag_before_outcomes(old, messages)
+    write_bag(new, messages)
+    older, newer = read_run(old), read_run(new)
+    assert older.warnings == [] and len(older.evaluations) == len(newer.evaluations) == 12
+    assert older.evaluations['outcomes'].shape == (12, 0)
+    assert set(older.evaluations['outcome_names']) == {()}
+    for name in newer.evaluations.columns:
+        assert str(older.evaluations[name]) == str(newer.evaluations[name]), name
+    assert records.told_outcomes(older) == {}
+    recorded = records.recorded_evaluations(older)
+    assert recorded and all(isinstance(value, np.ndarray) for value in recorded.values())
+
+
+def test_outcomes_read_back_with_our_reader_and_independent_ones(tmp_path):
+    messages = sample_messages(generations=2, population=6)
+    for message in messages[topics.EVALUATIONS]:
+        if message.status == 0:
+            message.outcome_names = ['limit_rest', 'touch']
+            message.outcomes = [message.candidate_id / 16, 0.75]
+    path = tmp_path / 'run.mcap'
+    write_bag(path, messages)
+    record = read_run(path)
+    ok = record.evaluations['status'] == 0
+    np.testing.assert_array_equal(record.evaluations['outcomes'][ok], [
+        [m.candidate_id / 16, 0.75] for m in messages[topics.EVALUATIONS] if m.status == 0])
+    assert record.evaluations['outcome_names'][0] == ('limit_rest', 'touch')
+    told = records.told_outcomes(record)
+    assert told[3][0] == ('limit_rest', 'touch') and told[3][1].tolist() == [3 / 16, 0.75]
+    with open(path, 'rb') as stream:
+        decoded = [message for _, _, _, message in make_reader(
+            stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages(
+            topics=['/' + topics.EVALUATIONS])]
+    with AnyReader([path]) as reader:
+        connections = [c for c in reader.connections if c.topic == '/' + topics.EVALUATIONS]
+        independent = [reader.deserialize(raw, connection.msgtype)
+                       for connection, _, raw in reader.messages(connections=connections)]
+    for messages_read in (decoded, independent):
+        assert [list(m.outcomes) for m in messages_read] == [
+            list(m.outcomes) for m in messages[topics.EVALUATIONS]]
+        assert [list(m.outcome_names) for m in messages_read] == [
+            list(m.outcome_names) for m in messages[topics.EVALUATIONS]]

@@ -9,22 +9,26 @@ import subprocess
 import sys
 
 from analysis_run import copy_bag
+from analysis_run import decoded_messages
 from analysis_run import run_cli
 from analysis_run import until_evaluation_of
+from hand_codesign.analysis import records
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.cli import main
 from hand_codesign.core import load_task
 from hand_codesign.core.descriptors import DESCRIPTORS, DesignDescriptors
+from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.optimizers import (AskTellOptimizer, Candidate, make_optimizer,
-                                           OptimizerError, replay)
+                                           OptimizerError, replay, TellError)
+from hand_codesign.core.outcomes import Answer
 from hand_codesign.core.quality_diversity import CmaMae, CmaMe
 from hand_codesign.core.task_spec import DESCRIPTOR_NAMES
 import numpy as np
 import pytest
 from task_files import optimizer_document, write_task as write_task_file
 from test_optimizers import run, same_candidates
-from test_system import assert_same_with_two_evaluators, finish, start_run
+from test_system import assert_same_with_two_evaluators, finish, start_run, summaries
 import yaml
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -149,6 +153,43 @@ def write_task(folder, document, name='qd.yaml'):
     return write_task_file(folder, document, name)
 
 
+def made_up_answer(x):
+    """Return two objectives and a limit_rest share of a genome (any function will do)."""
+    share = float(np.floor(np.asarray(x)[0] * 20 % 1.0 * 5) / 4)  # 0, 1/4, ... or 1
+    return Answer.of([float(np.sum((np.asarray(x) - 0.3) ** 2)), 0.0], ('limit_rest',), [share])
+
+
+def outcome_task(tmp_path):
+    archive = {'descriptors': ['joint_range', 'limit_rest'], 'cells': [5, 4]}
+    return load_task(write_task(tmp_path, task_document('cma-mae', archive)))
+
+
+def test_an_archive_spans_outcomes_told_with_the_objectives(tmp_path):
+    task = outcome_task(tmp_path)
+    optimizer = make_optimizer(task.replace(population=8), genome_spec(task).size)
+    assert optimizer.describe.names == ('joint_range', 'limit_rest')
+    assert optimizer.ranges == ((0.0, pytest.approx(math.pi)), (0.0, 1.0))
+    first = optimizer.ask()
+    with pytest.raises(TellError, match=r'without the outcome descriptors \['
+                                        r"'limit_rest'\]") as refused:
+        optimizer.tell({c.candidate_id: made_up_answer(c.x).objectives for c in first})
+    assert refused.value.invalid == [c.candidate_id for c in first]
+    asked = run(optimizer, made_up_answer, generations=4)  # unchanged by the refusal
+    assert same_candidates(asked[:8], first)
+    by_id = {c.candidate_id: c for c in asked}
+    spans = DesignDescriptors(task, ('joint_range',))
+    for elite in optimizer.elites():
+        x = by_id[elite.candidate_id].x
+        assert elite.descriptors == (spans(x)[0], made_up_answer(x).outcomes[0])
+    assert len({elite.cell[1] for elite in optimizer.elites()}) > 1
+    rebuilt = make_optimizer(task.replace(population=8), genome_spec(task).size)
+    answers = {c.candidate_id: made_up_answer(c.x) for c in asked}
+    assert replay(rebuilt, answers, {c.candidate_id: c.x for c in asked}) == 4
+    assert [(e.candidate_id, e.cell) for e in rebuilt.elites()] == [
+        (e.candidate_id, e.cell) for e in optimizer.elites()]
+    assert same_candidates(rebuilt.ask(), optimizer.ask())
+
+
 def test_descriptors_of_task5_designs_and_their_default_ranges():
     task = load_task(TASK5).replace(algorithm='cma-mae')
     assert tuple(DESCRIPTORS) == DESCRIPTOR_NAMES
@@ -220,7 +261,8 @@ BAD_ARCHIVES = [
                                     'got 0'),
     ('cma-mae', {'descriptors': ['finger_length', 'wrist_angle']},
      'optimizer.archive.descriptors[1]: expected one of finger_length, length_asymmetry, '
-     "joint_range, initial_angle, finger_spread, friction, got 'wrist_angle'"),
+     'joint_range, initial_angle, finger_spread, friction, limit_rest, touch, got '
+     "'wrist_angle'"),
     ('cma-mae', {'descriptors': ['finger_spread', 'joint_range']},
      'optimizer.archive.descriptors: expected descriptors that vary on structure [2, 2], got '
      "'finger_spread', which the task fixes at 0.14"),
@@ -232,6 +274,12 @@ BAD_ARCHIVES = [
                                        'learning_rate for cma-me'),
     ('cma', {'cells': [5, 5]}, 'optimizer.archive: expected no archive for cma (it is for '
                                'cma-mae and cma-me'),
+    ('mocma', {'descriptors': ['joint_range', 'limit_rest']},
+     'optimizer.archive: expected no archive for mocma (it is for cma-mae and cma-me'),
+    ('cma-mae', {'descriptors': ['limit_rests', 'joint_range']},
+     'optimizer.archive.descriptors[0]: expected one of finger_length, length_asymmetry, '
+     'joint_range, initial_angle, finger_spread, friction, limit_rest, touch, got '
+     "'limit_rests'"),
 ]
 
 
@@ -315,3 +363,80 @@ def test_an_interrupted_cma_mae_run_resumes_to_the_same_result(mae_run, tmp_path
     expected = json.loads((bag / 'result.json').read_text())
     for key in ('best_candidate_id', 'fitness', 'objectives', 'design'):
         assert result[key] == expected[key], key
+
+
+@pytest.fixture(scope='module')
+def outcome_run(tmp_path_factory):
+    """Return (task, bag) of a real cma-mae run over joint_range and limit_rest, 1 evaluator."""
+    folder = tmp_path_factory.mktemp('outcomes')
+    task = write_task(folder, task_document('cma-mae', {
+        'descriptors': ['joint_range', 'limit_rest'], 'cells': [5, 3]}))
+    bag = folder / 'one'
+    finish(start_run(bag, 1, budget=BUDGET, task=task))
+    return task, bag
+
+
+def archive_elites(bag):
+    """Return the elites of a run's archive replayed from its bag (records.archive_of)."""
+    run_id = json.loads((bag / 'result.json').read_text())['run_id']
+    archive = records.archive_of(read_run(bag, run_id=run_id))
+    return [(e.candidate_id, e.cell, e.descriptors, e.fitness) for e in archive.elites()]
+
+
+def test_a_real_run_spans_its_archive_by_outcomes_measured_in_its_evaluations(outcome_run):
+    task_path, bag = outcome_run
+    record = read_run(bag)
+    evaluations = record.evaluations
+    assert set(evaluations['outcome_names']) == {('limit_rest',)}
+    shares = np.asarray(evaluations['outcomes'], dtype=float).ravel()
+    assert len(shares) == 24 and set(shares) <= {0.0, 0.5, 1.0}  # 2 worlds per candidate
+    task = records.run_task_of(record)
+    genomes = dict(zip(record.candidates['candidate_id'].tolist(),
+                       record.candidates['genome']))
+    for row in range(0, 24, 7):  # the evaluator measured what core.evaluate measures
+        evaluation = evaluate(genomes[int(evaluations['candidate_id'][row])], task)
+        assert evaluation.outcomes.tolist() == [shares[row]]
+    told = {int(i): s for i, s in zip(evaluations['candidate_id'], shares)}
+    elites = archive_elites(bag)
+    assert all(descriptors[1] == told[candidate_id]
+               for candidate_id, _, descriptors, _ in elites)
+    assert len({cell for _, cell, _, _ in elites}) == len(elites) >= 2
+    decoded = decoded_messages(sorted(bag.glob('*.mcap'))[0], 'evaluations')
+    assert [list(m.outcomes) for m in decoded] == [[s] for s in shares]
+
+
+def test_a_real_run_with_outcomes_is_the_same_with_two_evaluators(outcome_run, tmp_path):
+    task, bag = outcome_run
+    assert_same_with_two_evaluators(bag, task, tmp_path, BUDGET)
+    assert archive_elites(tmp_path / 'two') == archive_elites(bag)
+
+
+def test_a_run_with_outcomes_resumes_from_its_bag_to_the_same_result(outcome_run, tmp_path):
+    _, bag = outcome_run
+    mcap, = sorted(bag.glob('*.mcap'))
+    interrupted = copy_bag(mcap, tmp_path / 'interrupted.mcap', keep=until_evaluation_of(18))
+    resumed = tmp_path / 'resumed'
+    finished = run_cli('run', '--resume', interrupted, '--evaluators', '2', '--bag', resumed)
+    assert finished.returncode == 0, finished.stdout + finished.stderr
+    result = json.loads((resumed / 'result.json').read_text())
+    expected = json.loads((bag / 'result.json').read_text())
+    for key in ('best_candidate_id', 'fitness', 'objectives', 'design'):
+        assert result[key] == expected[key], key
+    # the emitters, rebuilt with the recorded outcomes, asked what the uninterrupted run asked
+    continued = summaries(resumed)
+    assert continued and continued == summaries(bag)[-len(continued):]
+
+
+def test_analyze_draws_an_archive_over_an_outcome(outcome_run, tmp_path, capsys):
+    _, bag = outcome_run
+    capsys.readouterr()
+    out = tmp_path / 'report'
+    assert main(['analyze', str(bag), '--out', str(out)]) == 0
+    fact = next(line for line in capsys.readouterr().out.splitlines()
+                if line.startswith('archive '))
+    assert 'cells filled, over joint_range [0, 3.142] x limit_rest [0, 1]' in fact
+    rows = (out / 'archive.csv').read_text().splitlines()
+    assert rows[0] == ('candidate_id,generation,cell_joint_range,cell_limit_rest,joint_range,'
+                       'limit_rest,fitness')
+    assert len(rows) - 1 == len(archive_elites(bag))
+    assert (out / 'archive.png').read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'

@@ -24,9 +24,9 @@ from hand_codesign.commands import reproduce
 from hand_codesign.core import experiments
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.measures import (fingers, LIMIT_TOLERANCE, measure_worlds,
-                                         resting_on_limit_touching, shares_in_bands, summarize,
+from hand_codesign.core.measures import (measure_worlds, shares_in_bands, summarize,
                                          Tolerance, unseen_world_states)
+from hand_codesign.core.outcomes import fingers, LIMIT_TOLERANCE, resting_on_limit_touching
 from hand_codesign.core.rotations import axis_angle_quaternion, compose
 from hand_codesign.core.task import load_task, parse_task
 from hand_codesign.core.worlds import world_states
@@ -124,6 +124,17 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
         assert (task.algorithm, task.archive, mae.algorithm_name) == ('cma-mae', None, 'CMA-MAE')
         assert task.replace(algorithm='cma', source_text='') == parse_task(text).replace(
             source_text='')
+    # CMA-MAE over the joint-limit span and the outcome limit_rest, on each preset's lever
+    for name, key, preset in (('levers-task5', 'cma-mae-limit-rest-along-x', 'task5_along_x'),
+                              ('levers-task6', 'cma-mae-limit-rest-diagonal', 'task6_diagonal')):
+        mae, = [c for c in experiments.EXPERIMENTS[name].configurations if c.key == key]
+        text = (experiments.pinned_dir() / f'{preset}.yaml').read_text()
+        assert mae.preset == f'{preset}.yaml'
+        task = parse_task(experiments.configuration_task_text(mae, text))
+        assert task.algorithm == 'cma-mae'
+        assert task.archive.descriptors == ('joint_range', 'limit_rest')
+        assert task.replace(algorithm='cma', archive=None, source_text='') == parse_task(
+            text).replace(source_text='')
     reduced = levers.budget('reduced')
     assert (reduced.iterations, reduced.population, reduced.seeds) == (40, 40, 5)
     assert experiments.training_worlds(by_key['cma'], reduced) == 16

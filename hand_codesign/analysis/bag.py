@@ -50,6 +50,10 @@ import zstandard
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
 
+# Fields appended to a message type after bags were recorded with it: a bag of the older
+# schema reads with these columns empty (no names, no values) in every row.
+LATER_FIELDS = {EVALUATION_TYPE: {'outcome_names': 'names', 'outcomes': 'values'}}
+
 # What a damaged chunk raises while it is decompressed and broken up (lz4 raises RuntimeError).
 _DAMAGE_ERRORS = (McapError, struct.error, ValueError, UnicodeDecodeError, RuntimeError,
                   zstandard.ZstdError)
@@ -411,6 +415,20 @@ def _table(names, values, log_times, publish_times):
     return Table(columns, len(values))
 
 
+def _with_later_fields(type_name, table):
+    """Return the table with an empty column for each LATER_FIELDS field its schema lacks."""
+    for name, kind in LATER_FIELDS.get(type_name, {}).items():
+        if name not in table.columns:
+            if kind == 'names':
+                column = np.empty(len(table), dtype=object)
+                for row in range(len(table)):
+                    column[row] = ()
+            else:
+                column = np.zeros((len(table), 0))
+            table.columns[name] = column
+    return table
+
+
 def _empty_table():
     return Table({'log_time': np.array([], dtype=np.int64),
                   'publish_time': np.array([], dtype=np.int64)}, 0)
@@ -561,7 +579,8 @@ def read_run(path, run_id=None):
                             'cdr; skipped')
             continue
         rows = scan.messages.get(channel_id, [])
-        parts[channel.schema_name].append(_table(*_decode_channel(channel, rows, warnings)))
+        table = _table(*_decode_channel(channel, rows, warnings))
+        parts[channel.schema_name].append(_with_later_fields(channel.schema_name, table))
     tables = {name: _concatenate(parts[name]) for name in LOOP_TYPES}
 
     chosen, all_runs = _choose_run(run_id, tables, warnings)

@@ -19,6 +19,7 @@ work on the RunRecord it returns:
 - `stepping_rate(record)`: the physics steps per wall second of the run, as its user saw it.
 """
 
+import collections
 import dataclasses
 import json
 import pathlib
@@ -30,6 +31,7 @@ from hand_codesign.core.contract import STATUS_NAMES
 from hand_codesign.core.contract import STATUS_OK
 from hand_codesign.core.optimizers import OptimizerError
 from hand_codesign.core.optimizers import replay
+from hand_codesign.core.outcomes import Answer
 from hand_codesign.core.search import Search
 from hand_codesign.core.task import TaskError
 from hand_codesign.core.task_spec import QD_ALGORITHMS
@@ -394,6 +396,8 @@ def recorded_evaluations(record):
 
     Objectives told to the optimizer (summaries) come first; then the first successful
     Evaluation of each candidate not told yet (the batch in flight when the run stopped).
+    Where the answers carry outcome descriptors (a quality-diversity archive's,
+    core.outcomes), the value is a core.outcomes.Answer with them (`told_outcomes`).
     """
     recorded = told_objectives(record)
     rows = evaluation_rows(record)
@@ -402,7 +406,51 @@ def recorded_evaluations(record):
         objectives = rows.objectives[index]
         if candidate_id not in recorded and np.all(np.isfinite(objectives)):
             recorded[candidate_id] = objectives.copy()
-    return recorded
+    return with_outcomes(recorded, told_outcomes(record, rows))
+
+
+def told_answers(record):
+    """Return {candidate id: objectives or Answer} as told to the optimizer (summaries)."""
+    return with_outcomes(told_objectives(record), told_outcomes(record))
+
+
+def told_outcomes(record, rows=None):
+    """
+    Return {candidate id: (outcome names, values)} of the answers taken, where they have any.
+
+    A candidate's answer taken is its 'ok' Evaluation (`evaluation_rows`); of the answers
+    with the same objectives bit for bit, the outcomes most of them gave (the first on ties),
+    as core.audits takes an answer that two evaluators agree on. Empty for a bag recorded
+    before Evaluations had outcomes, or of a run without outcome descriptors.
+    """
+    evaluations = record.evaluations
+    if not len(evaluations) or 'outcome_names' not in evaluations:
+        return {}
+    rows = evaluation_rows(record) if rows is None else rows
+    answered = np.flatnonzero(np.isin(rows.status, ('ok', 'duplicate')))
+    taken = {int(rows.candidate_id[index]): index for index in answered
+             if rows.status[index] == 'ok'}
+    votes = {}
+    for index in answered:
+        candidate_id = int(rows.candidate_id[index])
+        names = tuple(evaluations['outcome_names'][index])
+        first = taken.get(candidate_id)
+        if not names or first is None or (rows.objectives[index].tobytes()
+                                          != rows.objectives[first].tobytes()):
+            continue
+        values = np.asarray(evaluations['outcomes'][index], dtype=float).reshape(-1)
+        votes.setdefault(candidate_id, collections.Counter())[
+            (names, values[:len(names)].tobytes())] += 1
+    return {candidate_id: (names, np.frombuffer(values, dtype=float).copy())
+            for candidate_id, counter in votes.items()
+            for (names, values), _ in counter.most_common(1)}
+
+
+def with_outcomes(recorded, outcomes):
+    """Return {id: objectives} with each id of `outcomes` an Answer holding them."""
+    return {candidate_id: (Answer.of(values, *outcomes[candidate_id])
+                           if candidate_id in outcomes else values)
+            for candidate_id, values in recorded.items()}
 
 
 def best_candidate_id(record):
@@ -473,8 +521,9 @@ def replayed_optimizer(record, algorithms, single=False):
     Return the optimizer of a run of one of `algorithms`, replayed from its bag, else None.
 
     The bag holds the evaluations, not the optimizer's state: the search is replayed from the
-    told objectives (it is deterministic), which rebuilds it exactly as the run had it. A
-    hierarchy or two-stage run gives its last optimization's, or None if `single`.
+    told objectives (it is deterministic), and the outcome descriptors of the answers taken
+    (`told_answers`), which rebuilds it exactly as the run had it. A hierarchy or two-stage
+    run gives its last optimization's, or None if `single`.
     """
     try:
         task = run_task_of(record)
@@ -485,7 +534,7 @@ def replayed_optimizer(record, algorithms, single=False):
         return None
     search = Search(task)
     try:
-        replay(search, told_objectives(record))
+        replay(search, told_answers(record))
     except OptimizerError:
         return None
     return search.optimizer
@@ -507,8 +556,9 @@ def archive_of(record):
     """
     Return the core.quality_diversity optimizer of a cma-mae or cma-me run, else None.
 
-    Replayed (replayed_optimizer): the descriptors are computed from the genomes, so the
-    archive comes back exactly as the run had it, elites, candidate ids and all.
+    Replayed (replayed_optimizer): the descriptors are computed from the genomes (and the
+    outcome descriptors read from the Evaluations), so the archive comes back exactly as the
+    run had it, elites, candidate ids and all.
     """
     return replayed_optimizer(record, QD_ALGORITHMS)
 

@@ -708,15 +708,17 @@ def plot_archive(path, archive, title):
                           vmax=float(within.max()) if len(within) else None)
     over = len(values) - len(within)
     best = archive.result
-    if best is not None:
-        point = archive.describe(best.x)
+    # the result is its cell's elite; its descriptors may be outcomes, not in the genome
+    point = next((elite.descriptors for elite in archive.elites()
+                  if best is not None and elite.candidate_id == best.candidate_id), None)
+    if point is not None:
         ax.plot(point[0], point[1], marker='*', markersize=14, color='tab:red',
                 markeredgecolor='white', linestyle='none',
                 label=f'recommended: candidate {best.candidate_id} ({best.fitness:.4g})')
     if over:
         ax.fill_between([], [], color='lightgrey',
                         label=f'over 10 x the median cell ({over} cell{"s" if over > 1 else ""})')
-    if best is not None or over:
+    if point is not None or over:
         ax.legend(fontsize='small', loc='upper right')
     figure.colorbar(image, ax=ax, extend='max' if over else 'neither',
                     label='weighted sum of the objectives (lower is better)')

@@ -29,6 +29,10 @@ whether the answer is right. Rules (the RunController applies them to each answe
   (`take_unaudited`), with the answers held for that evaluator's probation, so that a run
   never waits without end for an auditor.
 
+An answer is an objective vector, or a core.outcomes.Answer when the run's archive spans
+outcome descriptors: two answers agree when objectives and outcomes agree bit for bit, and the
+value taken is the first agreeing evaluator's whole answer.
+
 What this buys against an evaluator that lies rarely, after its probation: each lie is
 caught with probability `fraction`, so one that lies k times goes unnoticed with probability
 (1 - fraction)^k, and the lies told before it is caught stay in the search's history.
@@ -36,6 +40,7 @@ caught with probability `fraction`, so one that lies k times goes unnoticed with
 
 import collections
 
+from hand_codesign.core.outcomes import Answer
 from hand_codesign.core.supervision import serves_role
 import numpy as np
 
@@ -95,11 +100,16 @@ class Audits:
         return any(evaluator == evaluator_id for evaluator, _ in
                    self._answers.get(candidate_id, ()))
 
-    def take(self, candidate_id, evaluator_id, objectives, others_alive):
-        """Record an accepted answer; return its Verdict. others_alive: could anyone audit."""
-        objectives = np.asarray(objectives, dtype=float)
+    def take(self, candidate_id, evaluator_id, answer, others_alive):
+        """
+        Record an accepted answer; return its Verdict. others_alive: could anyone audit.
+
+        `answer`: the objectives, or a core.outcomes.Answer (objectives and outcomes).
+        """
+        if not isinstance(answer, Answer):
+            answer = np.asarray(answer, dtype=float)
         answers = self._answers.setdefault(candidate_id, [])
-        answers.append((evaluator_id, objectives))
+        answers.append((evaluator_id, answer))
         if len(answers) > 1:
             self.audit_evaluations += 1
             return self._compare(candidate_id, answers)
@@ -141,15 +151,15 @@ class Audits:
         return objectives
 
     def _compare(self, candidate_id, answers):
-        votes = collections.Counter(value.tobytes() for _, value in answers)
+        votes = collections.Counter(_fingerprint(value) for _, value in answers)
         value, count = votes.most_common(1)[0]
         if count < 2:
             return Verdict(exclude={evaluator for evaluator, _ in answers})
         del self._answers[candidate_id]
-        agreed = np.frombuffer(value, dtype=float).copy()
+        agreed = next(answer for _, answer in answers if _fingerprint(answer) == value)
         liars, released = [], {}
         for evaluator, objectives in answers:
-            if objectives.tobytes() == value:
+            if _fingerprint(objectives) == value:
                 self.passed.add(evaluator)
                 self._probation.pop(evaluator, None)
                 for held in self._held.pop(evaluator, []):
@@ -179,3 +189,8 @@ class Audits:
                           if evaluator != evaluator_id]
         self.reevaluations += len(redo)
         return redo
+
+
+def _fingerprint(answer):
+    """Return the bytes two agreeing answers share (objectives, and outcomes if any)."""
+    return answer.fingerprint() if isinstance(answer, Answer) else answer.tobytes()

@@ -40,6 +40,8 @@ from hand_codesign.core.contract import EVALUATORS_READY
 from hand_codesign.core.dispatch import Dispatcher
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.geometry import design_shapes
+from hand_codesign.core.outcomes import Answer
+from hand_codesign.core.outcomes import objectives_of
 from hand_codesign.core.physical import candidate_design
 from hand_codesign.core.runs import library_versions
 from hand_codesign.core.search import Search
@@ -117,15 +119,23 @@ class RunController:
             self.dispatcher.heard_from(evaluator_id, capacity, self.clock())
             self.advance()
 
-    def evaluated(self, run_id, candidate_id, evaluator_id, objectives, wall_time):
-        """Take an evaluation: the first answer, or an audit's, per core.audits' rules."""
+    def evaluated(self, run_id, candidate_id, evaluator_id, objectives, wall_time,
+                  outcome_names=(), outcomes=()):
+        """
+        Take an evaluation: the first answer, or an audit's, per core.audits' rules.
+
+        With outcome descriptors (core.outcomes, a quality-diversity archive's) the answer
+        told is a core.outcomes.Answer, else the objectives alone.
+        """
         if (not self.ours(run_id) or evaluator_id in self.audits.quarantined
                 or self.audits.answered(candidate_id, evaluator_id)
                 or not self.dispatcher.complete(candidate_id)):
             return
         self.wall_times.append(wall_time)
         others = set(self.dispatcher.live_evaluators(self.clock())) - {evaluator_id}
-        verdict = self.audits.take(candidate_id, evaluator_id, objectives, bool(others))
+        answer = (Answer.of(objectives, outcome_names, outcomes) if len(outcome_names)
+                  else objectives)
+        verdict = self.audits.take(candidate_id, evaluator_id, answer, bool(others))
         if verdict.value is not None:
             self.results[candidate_id] = verdict.value
         elif verdict.exclude:
@@ -232,7 +242,8 @@ class RunController:
         self.search.tell(self.results)
         self.told += len(self.batch)
         told_ids = [candidate.candidate_id for candidate in self.batch]
-        objectives = np.array([self.results[candidate_id] for candidate_id in told_ids])
+        objectives = np.array([objectives_of(self.results[candidate_id])
+                               for candidate_id in told_ids])
         generation, horizon = self.batch[0].generation, self.batch[0].horizon
         stage = self.batch[0].stage
         self.batch = None

@@ -14,6 +14,12 @@ decodes to, which is the archive's default extent along that axis.
     finger_spread     m    the greatest distance between two fingers' x on the palm
     friction               the hand's friction coefficient
 
+An archive may also span descriptors of the outcome of a design's rollouts (core.outcomes:
+limit_rest, touch), shares of the worlds in [0, 1] that its Evaluation carries.
+`DesignDescriptors` gives both: the descriptor vector of a candidate is the named descriptors in
+the task's order, those of the design computed from the genome, the others taken from the
+candidate's evaluation.
+
 A descriptor whose value a task fixes (its genes have equal bounds) cannot spread an archive:
 `descriptor_ranges` names it in a TaskError. Without `optimizer.archive.descriptors` an archive
 spans finger_length and joint_range, or finger_length and initial_angle for a task whose
@@ -24,7 +30,8 @@ import dataclasses
 from typing import Callable
 
 from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.task_spec import DESCRIPTOR_NAMES, TaskError
+from hand_codesign.core.outcomes import OUTCOME_NAMES, OUTCOME_RANGE
+from hand_codesign.core.task_spec import ARCHIVE_DESCRIPTOR_NAMES, DESCRIPTOR_NAMES, TaskError
 import numpy as np
 
 
@@ -131,7 +138,8 @@ DESCRIPTORS = {descriptor.name: descriptor for descriptor in (
     Descriptor('friction', '', lambda design: float(design.hand.friction),
                lambda values: values.of('hand.friction', values.centre.hand.friction)),
 )}
-# DESCRIPTOR_NAMES (task_spec, which the task reader checks names against) lists these keys
+# DESCRIPTOR_NAMES (task_spec) lists these keys; the task reader checks names against them
+# and core.outcomes' OUTCOME_NAMES (ARCHIVE_DESCRIPTOR_NAMES)
 
 
 def default_descriptors(task):
@@ -151,9 +159,12 @@ def descriptor_ranges(task, names, key='optimizer.archive.descriptors'):
     values = _ValueBounds(task)
     ranges = []
     for name in names:
+        if name in OUTCOME_NAMES:
+            ranges.append(OUTCOME_RANGE)
+            continue
         if name not in DESCRIPTORS:
             raise TaskError(f'{task.source}: {key}: expected one of '
-                            f'{", ".join(DESCRIPTOR_NAMES)}, got {name!r}')
+                            f'{", ".join(ARCHIVE_DESCRIPTOR_NAMES)}, got {name!r}')
         try:
             lower, upper = DESCRIPTORS[name].bounds(values)
         except TaskError as error:
@@ -169,18 +180,28 @@ def descriptor_ranges(task, names, key='optimizer.archive.descriptors'):
 
 
 class DesignDescriptors:
-    """The named descriptors of a task's genomes: call it with a normalized genome."""
+    """The named descriptors of a task's candidates: call it with a genome (and outcomes)."""
 
     def __init__(self, task, names=None):
         self.names = tuple(names or default_descriptors(task))
         self.spec = genome_spec(task)
         self.ranges = descriptor_ranges(task, self.names)
-        self.units = tuple(DESCRIPTORS[name].unit for name in self.names)
+        self.units = tuple(DESCRIPTORS[name].unit if name in DESCRIPTORS else ''
+                           for name in self.names)
+        self.outcome_names = tuple(name for name in self.names if name in OUTCOME_NAMES)
 
-    def __call__(self, x):
-        """Return the descriptor values of normalized genome x."""
+    def __call__(self, x, outcomes=None):
+        """
+        Return the descriptor values of normalized genome x.
+
+        `outcomes` ({name: value}, core.outcomes.outcomes_of an evaluation) gives those of the
+        outcome; KeyError names one that it lacks.
+        """
         design = self.spec.decode(x)
-        return np.array([DESCRIPTORS[name].value(design) for name in self.names])
+        outcomes = outcomes or {}
+        return np.array([outcomes[name] if name in OUTCOME_NAMES
+                         else DESCRIPTORS[name].value(design) for name in self.names],
+                        dtype=float)
 
 
 __all__ = ['DESCRIPTOR_NAMES', 'DESCRIPTORS', 'Descriptor', 'DesignDescriptors',

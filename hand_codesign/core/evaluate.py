@@ -17,15 +17,21 @@ or that plus the torque penalty): both rank behind every design that stays stabl
 evaluate is a pure function of (x, task, worlds): the process-wide Simulator is reset and
 rebuilt for every candidate, so results are bit-identical in any process and in any order.
 A candidate's sub-problem (Candidate.horizon) is part of its task: task.replace(horizon=...).
+
+When the task's quality-diversity archive names outcome descriptors (core.outcomes), each
+world's scene is also read once at the end of its rollout and the Evaluation carries their
+shares of the worlds (`outcome_names`, `outcomes`); a design that starts in collision has
+0 for each. Other tasks read nothing more.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional, Sequence, Tuple
 
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.hand import hand_model
 from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
                                            task_torque_penalty, weighted_fitness)
+from hand_codesign.core.outcomes import OutcomeWatch, task_outcomes
 from hand_codesign.core.policies import make_policy
 from hand_codesign.core.sim import object_shape, Simulator
 from hand_codesign.core.worlds import object_state, world_states
@@ -53,6 +59,10 @@ class Evaluation:
     # then quaternion x, y, z, w; the start pose where nothing was simulated (a collision),
     # the last finite pose of an unstable world. final_errors are measured from it.
     final_poses: np.ndarray
+    # the outcome descriptors the task's archive names (core.outcomes) and their shares of
+    # the worlds; empty for every other task
+    outcome_names: Tuple[str, ...] = ()
+    outcomes: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 _SIMULATOR = None
@@ -75,6 +85,7 @@ class _TaskContext:
         self.task = task
         self.spec = None
         self.schedule = goal_schedule(task)
+        self.outcome_names = task_outcomes(task)  # () unless its archive names some
         self.default_worlds = None
         self.worlds = {}  # tuple of WorldStates -> (object states, initial errors)
 
@@ -142,12 +153,13 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     objects = [(state, object_shape(simulator.client, state, task.object_spec.shape))
                for state in states]
     num_objectives = schedule.num_objectives
+    watch = OutcomeWatch(context.outcome_names, len(states))
     if simulator.start_collisions(objects):
         world_values = np.full((len(states), num_objectives), COLLISION_PENALTY)
         starts = np.array([(*state.position, *state.orientation) for state in states],
                           dtype=float).reshape(len(states), 7)
         return _evaluation(task, combine_worlds(world_values, collision=True), world_values,
-                           True, 0, 0.0, initial.copy(), initial.copy(), starts)
+                           True, 0, 0.0, initial.copy(), initial.copy(), starts, watch)
     world_values = np.empty((len(states), num_objectives))
     final = np.empty((len(states), 2))
     final_poses = np.empty((len(states), 7))
@@ -155,7 +167,8 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     for index, (state, shape) in enumerate(objects):
         if on_world is not None:
             on_world(index, simulator)
-        result = simulator.rollout(state, shape, policy, schedule, on_frame, frame_every)
+        result = simulator.rollout(state, shape, policy, schedule, on_frame, frame_every,
+                                   watch.on_end(index))
         steps += result.steps
         if result.unstable:
             unstable_worlds += 1
@@ -167,15 +180,16 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
         final_poses[index] = (*result.final_position, *result.final_orientation)
     objectives = combine_worlds(world_values, penalty, fraction=task.worlds.worst_fraction)
     return _evaluation(task, objectives, world_values, False, unstable_worlds,
-                       steps * task.time_step, initial.copy(), final, final_poses)
+                       steps * task.time_step, initial.copy(), final, final_poses, watch)
 
 
 def _evaluation(task, objectives, world_values, collision, unstable_worlds, simulated_time,
-                initial, final, final_poses):
+                initial, final, final_poses, watch):
     return Evaluation(objectives=np.asarray(objectives, dtype=float),
                       objective_names=tuple(task.objective_names),
                       fitness=weighted_fitness(objectives, task.objective_weights),
                       world_objectives=world_values, collision=bool(collision),
                       unstable_worlds=int(unstable_worlds),
                       simulated_time=float(simulated_time), initial_errors=initial,
-                      final_errors=final, final_poses=final_poses)
+                      final_errors=final, final_poses=final_poses,
+                      outcome_names=watch.names, outcomes=watch.shares())

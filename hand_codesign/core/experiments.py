@@ -25,7 +25,11 @@ presets' lever, a preset choice of ours revisited: Task 5 scored along the finge
 alone (`task5_along_x.yaml`; its tables give the shares within 5 mm along x and along y
 beside the share in the plane for every configuration) and Task 6's hand turned to squeeze
 along the goal's diagonal (`task6_diagonal.yaml`), which `levers-task6` also runs with other
-choices of its preset changed (gravity compensation, finger friction, torque bound).
+choices of its preset changed (gravity compensation, finger friction, torque bound). On
+each of these two presets CMA-MAE also spans its archive by an outcome of the rollouts
+(`cma-mae-limit-rest-along-x`, `cma-mae-limit-rest-diagonal`: the joint-limit span and
+limit_rest, the share of worlds in which a design ends on a joint limit while touching the
+box, core.outcomes).
 """
 
 import dataclasses
@@ -133,14 +137,20 @@ def _preset_lever_configurations(preset, name):
     Plain CMA-ES, and the best levers on the paper's preset: resampled worlds and quality
     diversity; and IPOP-CMA-ES with a stagnation window of 10 generations, since with its
     default window (56 generations for their 24 genes and 40 candidates) no restart fires
-    in 40.
+    in 40. Last, CMA-MAE over the joint-limit span and the outcome limit_rest (the share of
+    worlds in which the design ends on a joint limit while touching the box, core.outcomes):
+    an archive that keeps the designs that find their joint limits apart from those that do
+    not.
     """
     return (Configuration(f'cma-{name}', preset, 'cma', LEVER_WORLDS, 'torque'),
             Configuration(f'cma-{name}-resample', preset, 'cma', LEVER_WORLDS, 'torque',
                           (('worlds.resample', 'generation'),)),
             Configuration(f'cma-mae-{name}', preset, 'cma-mae', LEVER_WORLDS, 'torque'),
             Configuration(f'ipop-cma-{name}-stagnation-10', preset, 'ipop-cma', LEVER_WORLDS,
-                          'torque', (('optimizer.restart_stagnation', 10),)))
+                          'torque', (('optimizer.restart_stagnation', 10),)),
+            Configuration(f'cma-mae-limit-rest-{name}', preset, 'cma-mae', LEVER_WORLDS,
+                          'torque',
+                          (('optimizer.archive.descriptors', ('joint_range', 'limit_rest')),)))
 
 
 def _diagonal_hand_configurations():

@@ -19,7 +19,10 @@ policy; the measure only looks at the scene, it never changes it):
   last step, or the goal check where early termination stopped it) some finger has a joint
   within LIMIT_TOLERANCE of one of its limits (or past it: Bullet's limits are soft) and
   the same finger touches the object (a contact point between any segment of that finger and
-  the object with a separation of at most CONTACT_DISTANCE).
+  the object with a separation of at most CONTACT_DISTANCE). The rule is core.outcomes'
+  (`resting_on_limit_touching`), which a quality-diversity search also measures in its own
+  rollouts (the outcome descriptor limit_rest); here it is read at the last frame of a
+  rollout, so an unstable world gives the state of its last stable frame.
 
 Per design (`DesignMeasures`): the share of worlds within the tolerance, the median and 90th
 percentile of the error, and **joint limits found**: the design rests on a limit while
@@ -33,13 +36,13 @@ import math
 from typing import Optional
 
 from hand_codesign.core.evaluate import _TaskContext, evaluate_design
+# the rule of resting on a limit while touching is core.outcomes' (evaluate uses it too)
+from hand_codesign.core.outcomes import resting_on_limit_touching
 from hand_codesign.core.robustness import map_chunks, start_and_goal_poses
 from hand_codesign.core.worlds import WorldState
 import numpy as np
 
 UNSEEN_STREAM = 11  # second entropy word of the unseen worlds' SeedSequence
-LIMIT_TOLERANCE = 0.02  # rad: a joint this close to a limit (or past it) rests on it
-CONTACT_DISTANCE = 0.001  # m: a contact point this close (or penetrating) is a touch
 LIMITS_FOUND_SHARE = 0.5  # share of the worlds in which the design must rest on a limit
 ERROR_KINDS = ('position', 'plane', 'x', 'y', 'orientation')
 AXES = ('x', 'y')  # the error kinds along one world axis
@@ -194,39 +197,6 @@ class LimitContactWatch:
     def on_frame(self, step, simulator):
         # every frame overwrites the flag: the last one is the rollout's end
         self.flags[self.world] = resting_on_limit_touching(simulator)
-
-
-def resting_on_limit_touching(simulator):
-    """Return True if some finger has a joint on a limit and touches the current object."""
-    client, hand, links = simulator.client, simulator.hand, simulator.model.links
-    if simulator.object_body is None or not links:
-        return False
-    touching = {point[3] for point in client.getContactPoints(hand, simulator.object_body)
-                if point[8] <= CONTACT_DISTANCE}
-    angles = [state[0] for state in client.getJointStates(hand, list(range(len(links))))]
-    for finger in fingers(links):
-        on_limit = any(on_its_limit(links[index], angles[index]) for index in finger)
-        if on_limit and touching.intersection(finger):
-            return True
-    return False
-
-
-def fingers(links):
-    """Return the link indices of each finger: a finger starts at a link on the palm."""
-    groups = []
-    for index, link in enumerate(links):
-        if link.parent == -1:
-            groups.append([])
-        groups[-1].append(index)
-    return groups
-
-
-def on_its_limit(link, angle):
-    """Return True if a joint's angle is within LIMIT_TOLERANCE of a limit, or past it."""
-    if link.lower_limit is None:
-        return False
-    return (angle <= link.lower_limit + LIMIT_TOLERANCE
-            or angle >= link.upper_limit - LIMIT_TOLERANCE)
 
 
 def _measure_chunk(job):

@@ -35,8 +35,14 @@ The choices that keep the contracts of `core.optimizers`:
   draws from the optimizer's private generator. pyribs draws from its own numpy Generators,
   which pickle with the rest of the state: `get_state` / `from_state` continue bit-identically.
 - The genome space stays the unbounded normalized one of CMA-ES (no bounds on the emitters).
+- Outcome descriptors (core.outcomes: limit_rest, touch) come from the evaluations: `tell`
+  takes, per id, an objective vector, or anything with `objectives`, `outcome_names` and
+  `outcomes` (a core.outcomes.Answer, an Evaluation); a candidate whose answer lacks an
+  outcome the archive spans is refused like one without objectives (TellError). Replaying a
+  run needs them again: records and resume read them from the bag's Evaluation messages.
 """
 
+from collections.abc import Mapping
 import dataclasses
 
 from hand_codesign.core.genome import fold
@@ -44,6 +50,8 @@ from hand_codesign.core.optimizers import AskTellOptimizer
 from hand_codesign.core.optimizers import derived_seed
 from hand_codesign.core.optimizers import OptimizerError
 from hand_codesign.core.optimizers import SIGMA0
+from hand_codesign.core.optimizers import TellError
+from hand_codesign.core.outcomes import outcomes_of
 import numpy as np
 
 DEFAULT_CELLS = (10, 10)
@@ -118,6 +126,7 @@ class QualityDiversity(AskTellOptimizer):
         self.batch_sizes = tuple(share + (1 if k < extra else 0) for k in range(int(count)))
         self.threshold = None  # the archive's minimum quality, set by generation 0
         self._scheduler = None
+        self._outcomes = {}  # id -> {outcome: value} of the generation being told
 
     # -- the archive ------------------------------------------------------------------------
 
@@ -154,6 +163,30 @@ class QualityDiversity(AskTellOptimizer):
 
     # -- ask and tell -----------------------------------------------------------------------
 
+    def tell(self, results):
+        """Tell the asked generation's evaluations (AskTellOptimizer.tell), with outcomes."""
+        wanted = getattr(self.describe, 'outcome_names', ())
+        if not wanted:
+            return super().tell(results)
+        pairs = list(results.items()) if isinstance(results, Mapping) else list(results)
+        outcomes = {}
+        for pair in pairs:
+            try:
+                key, value = pair
+                outcomes[int(key)] = outcomes_of(value)
+            except (TypeError, ValueError):
+                continue  # the base tell names the malformed entry
+        lacking = sorted(candidate.candidate_id for candidate in self.pending
+                         if not set(wanted) <= set(outcomes.get(candidate.candidate_id, {})))
+        if lacking:
+            raise TellError(f'tell() refused: ids {lacking} without the outcome descriptors '
+                            f'{list(wanted)} the archive spans', invalid=lacking)
+        self._outcomes = outcomes
+        try:
+            super().tell(pairs)
+        finally:
+            self._outcomes = {}
+
     def _sample(self):
         if self._scheduler is None:
             return list(self.x0 + self.sigma0 * np.random.standard_normal(
@@ -164,7 +197,8 @@ class QualityDiversity(AskTellOptimizer):
         candidates = self._pending[0]
         fields = {
             'objective': -np.array([self.fitness_of(values) for values in objectives]),
-            'measures': np.array([self.describe(point) for point in points], dtype=float),
+            'measures': np.array([self._describe(point, c.candidate_id)
+                                  for point, c in zip(points, candidates)], dtype=float),
             'candidate_id': np.array([c.candidate_id for c in candidates], dtype=np.int64),
             'generation': np.array([c.generation for c in candidates], dtype=np.int64),
         }
@@ -172,6 +206,12 @@ class QualityDiversity(AskTellOptimizer):
             self._start(np.array(points, dtype=float), fields)
         else:
             self._scheduler.tell(**fields)
+
+    def _describe(self, point, candidate_id):
+        """Return a told candidate's descriptors: of its genome, and its outcomes if needed."""
+        if not getattr(self.describe, 'outcome_names', ()):
+            return self.describe(point)
+        return self.describe(point, self._outcomes[candidate_id])
 
     def _start(self, points, fields):
         """Build archives, emitters and scheduler; add generation 0 (module doc)."""

@@ -58,7 +58,8 @@ SIGNED_FIELDS = {
         ('evaluator_id', 's'), ('status', 'u'), ('reason', 's'), ('objectives', 'f[]'),
         ('objective_names', 's[]'), ('fitness', 'f'), ('collision', 'u'),
         ('unstable_worlds', 'u'), ('simulated_time', 'f'), ('wall_time', 'f'),
-        ('world_objectives', 'f[]'), ('measured', 'u')),
+        ('world_objectives', 'f[]'), ('measured', 'u'), ('outcome_names', 's[]'),
+        ('outcomes', 'f[]')),
 }
 UNSIGNED_FIELDS = ('signature', 'stamp')
 

@@ -248,21 +248,26 @@ class Simulator:
         return plan
 
     def rollout(self, state, shape, policy, schedule,
-                on_frame: Optional[Callable] = None, frame_every=1):
+                on_frame: Optional[Callable] = None, frame_every=1,
+                on_end: Optional[Callable] = None):
         """
         Run one world from the start of the scene: return a Rollout.
 
         `state`/`shape`: the world's ObjectState and its collision shape; `policy`: a policy
         of hand_codesign.core.policies; `schedule`: the task's objectives.GoalSchedule.
         `on_frame(step, simulator)` is called at step 0 and every `frame_every` steps (the
-        loop pays nothing for it when it is None).
+        loop pays nothing for it when it is None). `on_end(simulator, rollout)` is called once
+        after the loop, with the object still in the scene (core.outcomes reads it there).
         """
         self.reset_hand()
         body = self.create_object(state, shape)
         plan = self.plan(schedule, frame_every if on_frame is not None else 0)
         trace = schedule.new_trace(state)
         try:
-            return self._run(body, policy, plan, trace, state, on_frame)
+            result = self._run(body, policy, plan, trace, state, on_frame)
+            if on_end is not None:
+                on_end(self, result)
+            return result
         finally:
             self.remove_object()
 

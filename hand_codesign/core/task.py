@@ -97,9 +97,12 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
       archive:                       # optional, cma-mae / cma-me only (these defaults):
         descriptors: [finger_length, joint_range]  # two of core.descriptors' descriptors;
                                      # default these, or initial_angle for joints without limits
+                                     # or of core.outcomes' (limit_rest, touch: shares of the
+                                     # worlds, measured in the rollouts, each in [0, 1])
         cells: [10, 10]              # of the grid, along each descriptor
         ranges: [[0.16, 0.36], [0, pi]]            # optional; default: the least and
-                                     # greatest value on the task's genome bounds
+                                     # greatest value on the task's genome bounds ([0, 1] for
+                                     # an outcome)
         emitters: 4                  # optional; default population // 10, at least 1
         learning_rate: 0.01          # optional: CMA-MAE's alpha (cma-me: always 1)
     hierarchy:                       # optional: search hand structures bottom-up (Fig. 1)

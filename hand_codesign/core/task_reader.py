@@ -15,8 +15,8 @@ from hand_codesign.core.design import (ControllerDesign, Design, FingerDesign, H
                                        JointDesign)
 from hand_codesign.core.rotations import axis_angle_quaternion
 from hand_codesign.core.task_checks import check_task
-from hand_codesign.core.task_spec import (ALGORITHMS, ArchiveSpec, AXES, Bounds,
-                                          DESCRIPTOR_NAMES, DISTANCES,
+from hand_codesign.core.task_spec import (ALGORITHMS, ARCHIVE_DESCRIPTOR_NAMES, ArchiveSpec,
+                                          AXES, Bounds, DISTANCES,
                                           EarlyTerminationSpec, GoalSpec, HandSpec, HierarchySpec,
                                           HorizonSpec, MORPHOLOGY_PARAMETERS, MorphologySpec,
                                           ObjectSpec, OrientationGoal, ParameterSpec, PhysicsSpec,
@@ -558,7 +558,7 @@ class _Reader:
         descriptors = None
         if 'descriptors' in section:
             descriptors = tuple(self.choice(item, f'{key}.descriptors[{index}]',
-                                            DESCRIPTOR_NAMES)
+                                            ARCHIVE_DESCRIPTOR_NAMES)
                                 for index, item in enumerate(section['descriptors']))
         if descriptors is not None and descriptors[0] == descriptors[1]:
             self.fail(_join(key, 'descriptors'), 'two different descriptors',

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from typing import Any, Optional, Tuple
 
 from hand_codesign.core.design import Design
+from hand_codesign.core.outcomes import OUTCOME_NAMES
 from hand_codesign.core.rotations import rotation_matrix
 import numpy as np
 
@@ -22,6 +23,8 @@ QD_ALGORITHMS = ('cma-mae', 'cma-me')  # quality-diversity search (core.quality_
 # the descriptors of a design an archive may span (core.descriptors)
 DESCRIPTOR_NAMES = ('finger_length', 'length_asymmetry', 'joint_range', 'initial_angle',
                     'finger_spread', 'friction')
+# and all it may span: those of the design, then those of its rollouts' outcome (core.outcomes)
+ARCHIVE_DESCRIPTOR_NAMES = DESCRIPTOR_NAMES + OUTCOME_NAMES
 POLICY_KINDS = ('torque', 'pd')
 TORQUE_MODES = ('constant', 'interpolated')
 PARAMETER_MODES = ('fixed', 'bounds', 'delta', 'seed', 'none')
@@ -278,9 +281,11 @@ class ArchiveSpec:
     """
     The archive of a quality-diversity search (YAML `optimizer.archive`, optional).
 
-    Two descriptors of the design (core.descriptors; None: finger_length and joint_range, or
-    initial_angle for joints without limits) span a grid of `cells`; `ranges` (None: the least
-    and greatest value each descriptor takes on the task's genome bounds) its extent.
+    Two descriptors (None: finger_length and joint_range, or initial_angle for joints without
+    limits) span a grid of `cells`: of the design (core.descriptors) or of the outcome of its
+    rollouts (core.outcomes: limit_rest, touch, shares of the worlds in [0, 1]); `ranges`
+    (None: the least and greatest value each descriptor takes on the task's genome bounds,
+    [0, 1] for an outcome) its extent.
     `emitters` (None: one per 10 candidates) share the population; `learning_rate` (None:
     0.01) is CMA-MAE's alpha.
     """

@@ -69,7 +69,8 @@ def evaluation_message(candidate, evaluator_id, evaluation):
         fitness=float(evaluation.fitness), collision=bool(evaluation.collision),
         unstable_worlds=int(evaluation.unstable_worlds),
         simulated_time=float(evaluation.simulated_time),
-        world_objectives=float_list(evaluation.world_objectives))
+        world_objectives=float_list(evaluation.world_objectives),
+        outcome_names=list(evaluation.outcome_names), outcomes=float_list(evaluation.outcomes))
 
 
 def rejection_message(candidate, evaluator_id, reason):

@@ -86,8 +86,7 @@ class OptimizerNode(Node):
         self.published = dict.fromkeys(self.publishers_, 0)
         for name, callback in ((topics.EVALUATIONS, self.on_evaluation),
                                (topics.EVALUATOR_STATUS, self.on_status)):
-            self.create_subscription(topics.MESSAGE_TYPES[name], name, callback,
-                                     topics.QOS[name])
+            self.create_subscription(topics.MESSAGE_TYPES[name], name, callback, topics.QOS[name])
         self.publish(topics.RUN_INFO, self.signer.run_info(
             RunInfo(**self.run.run_info(), stamp=stamp_now(self))))
         self.log(self.run.describe() + self.signer.note)
@@ -120,7 +119,8 @@ class OptimizerNode(Node):
         elif message.status == STATUS_REJECTED:
             self.run.rejected(*key, message.reason)
         else:
-            self.run.evaluated(*key, message.objectives, message.wall_time)
+            self.run.evaluated(*key, message.objectives, message.wall_time,
+                               message.outcome_names, message.outcomes)
 
     def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states, design):
         self.publish(topics.CANDIDATES, self.signer.candidate(candidate_message(

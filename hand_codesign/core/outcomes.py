@@ -1,0 +1,146 @@
+"""
+Outcome descriptors: what a design did at the end of its rollouts, as shares of the worlds.
+
+A quality-diversity archive (core.quality_diversity) may span outcome descriptors besides
+those of the morphology (core.descriptors). They are measured in the very rollouts
+`core.evaluate.evaluate_design` runs, by reading the scene once at the end of each world's
+rollout (its last step, or the goal check where early termination stopped it) before the
+object is removed; nothing in the scene changes, so the objectives stay bit-identical:
+
+    limit_rest  the share of the worlds in which some finger has a joint within
+                LIMIT_TOLERANCE of one of its limits (or past it: Bullet's limits are soft)
+                and the same finger touches the object (a contact point between any segment
+                of that finger and the object with a separation of at most CONTACT_DISTANCE)
+    touch       the share of the worlds in which any finger touches the object
+
+A world the design starts in collision with is not simulated and counts as neither; so does
+a world whose simulation became unstable (its scene is not a resting state). Both are shares
+of all the candidate's worlds, in [0, 1]. core.measures applies the same rule on unseen
+worlds (`resting_on_limit_touching`).
+
+They are computed only when the task's `optimizer.archive.descriptors` names one
+(`task_outcomes`): every other evaluation pays nothing. They travel in the Evaluation message
+(`outcome_names`, `outcomes`) and reach the search as an `Answer` (objectives and outcomes).
+"""
+
+import dataclasses
+from typing import Tuple
+
+import numpy as np
+
+LIMIT_TOLERANCE = 0.02  # rad: a joint this close to a limit (or past it) rests on it
+CONTACT_DISTANCE = 0.001  # m: a contact point this close (or penetrating) is a touch
+OUTCOME_NAMES = ('limit_rest', 'touch')
+OUTCOME_RANGE = (0.0, 1.0)  # every outcome descriptor is a share of the worlds
+
+
+def task_outcomes(task):
+    """Return the outcome descriptors the task's archive names, in its order (else ())."""
+    archive = getattr(task, 'archive', None)
+    names = archive.descriptors if archive is not None and archive.descriptors else ()
+    return tuple(name for name in names if name in OUTCOME_NAMES)
+
+
+def touching_links(simulator):
+    """Return the set of the hand's links that touch the current object."""
+    if simulator.object_body is None:
+        return set()
+    return {point[3] for point in simulator.client.getContactPoints(
+        simulator.hand, simulator.object_body) if point[8] <= CONTACT_DISTANCE}
+
+
+def resting_on_limit_touching(simulator):
+    """Return True if some finger has a joint on a limit and touches the current object."""
+    client, hand, links = simulator.client, simulator.hand, simulator.model.links
+    if simulator.object_body is None or not links:
+        return False
+    touching = touching_links(simulator)
+    angles = [state[0] for state in client.getJointStates(hand, list(range(len(links))))]
+    for finger in fingers(links):
+        on_limit = any(on_its_limit(links[index], angles[index]) for index in finger)
+        if on_limit and touching.intersection(finger):
+            return True
+    return False
+
+
+def fingers(links):
+    """Return the link indices of each finger: a finger starts at a link on the palm."""
+    groups = []
+    for index, link in enumerate(links):
+        if link.parent == -1:
+            groups.append([])
+        groups[-1].append(index)
+    return groups
+
+
+def on_its_limit(link, angle):
+    """Return True if a joint's angle is within LIMIT_TOLERANCE of a limit, or past it."""
+    if link.lower_limit is None:
+        return False
+    return (angle <= link.lower_limit + LIMIT_TOLERANCE
+            or angle >= link.upper_limit - LIMIT_TOLERANCE)
+
+
+_RULES = {'limit_rest': resting_on_limit_touching,
+          'touch': lambda simulator: bool(touching_links(simulator))}
+
+
+class OutcomeWatch:
+    """Per world, whether each named outcome holds at the end of its rollout."""
+
+    def __init__(self, names, worlds):
+        self.names = tuple(names)
+        self.flags = np.zeros((worlds, len(self.names)), dtype=bool)
+
+    def on_end(self, index):
+        """Return the Simulator.rollout `on_end` of world `index`, or None without outcomes."""
+        if not self.names:
+            return None
+
+        def read(simulator, rollout):
+            # an unstable world's scene is no resting state: it counts as neither
+            if not rollout.unstable:
+                self.flags[index] = [_RULES[name](simulator) for name in self.names]
+        return read
+
+    def shares(self):
+        """Return the share of the worlds in which each outcome held."""
+        if not len(self.flags):
+            return np.zeros(len(self.names))
+        return self.flags.mean(axis=0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Answer:
+    """An evaluation as the search is told it: objectives and the outcome descriptors."""
+
+    objectives: np.ndarray
+    outcome_names: Tuple[str, ...] = ()
+    outcomes: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+
+    @classmethod
+    def of(cls, objectives, outcome_names=(), outcomes=()):
+        """Return the Answer of message fields (any sequences of numbers and names)."""
+        return cls(np.array(objectives, dtype=float), tuple(str(name) for name in outcome_names),
+                   np.array(outcomes, dtype=float).reshape(-1))
+
+    def fingerprint(self):
+        """Return bytes that two answers share when they agree bit for bit."""
+        return b'\0'.join([self.objectives.tobytes(), '\0'.join(self.outcome_names).encode(),
+                           self.outcomes.tobytes()])
+
+
+def objectives_of(value):
+    """Return the objective vector of an objective vector, an Answer or an Evaluation."""
+    return np.asarray(getattr(value, 'objectives', value), dtype=float)
+
+
+def outcomes_of(value):
+    """Return {outcome name: value} of an Answer or an Evaluation ({} of a bare vector)."""
+    return dict(zip(getattr(value, 'outcome_names', ()),
+                    (float(v) for v in getattr(value, 'outcomes', ()))))
+
+
+__all__ = ['Answer', 'CONTACT_DISTANCE', 'LIMIT_TOLERANCE', 'OUTCOME_NAMES', 'OUTCOME_RANGE',
+           'OutcomeWatch', 'fingers', 'objectives_of', 'on_its_limit', 'outcomes_of',
+           'resting_on_limit_touching', 'task_outcomes', 'touching_links']
