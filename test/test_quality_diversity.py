@@ -350,19 +350,23 @@ def test_analyze_draws_the_archive_and_lists_its_best_designs(mae_run, tmp_path,
     assert '![archive.png](archive.png)' in (out / 'report.md').read_text()
 
 
-def test_an_interrupted_cma_mae_run_resumes_to_the_same_result(mae_run, tmp_path):
-    _, bag, _ = mae_run
+def resume_interrupted_copy(bag, folder):
+    """Resume a copy of a run's bag cut within generation 2; assert its result; return it."""
     mcap, = sorted(bag.glob('*.mcap'))
-    # the bag ends within generation 2
-    interrupted = copy_bag(mcap, tmp_path / 'interrupted.mcap',
-                           keep=until_evaluation_of(18))
-    resumed = tmp_path / 'resumed'
+    interrupted = copy_bag(mcap, folder / 'interrupted.mcap', keep=until_evaluation_of(18))
+    resumed = folder / 'resumed'
     finished = run_cli('run', '--resume', interrupted, '--evaluators', '2', '--bag', resumed)
     assert finished.returncode == 0, finished.stdout + finished.stderr
     result = json.loads((resumed / 'result.json').read_text())
     expected = json.loads((bag / 'result.json').read_text())
     for key in ('best_candidate_id', 'fitness', 'objectives', 'design'):
         assert result[key] == expected[key], key
+    return resumed
+
+
+def test_an_interrupted_cma_mae_run_resumes_to_the_same_result(mae_run, tmp_path):
+    _, bag, _ = mae_run
+    resume_interrupted_copy(bag, tmp_path)
 
 
 @pytest.fixture(scope='module')
@@ -413,15 +417,7 @@ def test_a_real_run_with_outcomes_is_the_same_with_two_evaluators(outcome_run, t
 
 def test_a_run_with_outcomes_resumes_from_its_bag_to_the_same_result(outcome_run, tmp_path):
     _, bag = outcome_run
-    mcap, = sorted(bag.glob('*.mcap'))
-    interrupted = copy_bag(mcap, tmp_path / 'interrupted.mcap', keep=until_evaluation_of(18))
-    resumed = tmp_path / 'resumed'
-    finished = run_cli('run', '--resume', interrupted, '--evaluators', '2', '--bag', resumed)
-    assert finished.returncode == 0, finished.stdout + finished.stderr
-    result = json.loads((resumed / 'result.json').read_text())
-    expected = json.loads((bag / 'result.json').read_text())
-    for key in ('best_candidate_id', 'fitness', 'objectives', 'design'):
-        assert result[key] == expected[key], key
+    resumed = resume_interrupted_copy(bag, tmp_path)
     # the emitters, rebuilt with the recorded outcomes, asked what the uninterrupted run asked
     continued = summaries(resumed)
     assert continued and continued == summaries(bag)[-len(continued):]
