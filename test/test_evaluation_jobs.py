@@ -94,6 +94,8 @@ def test_the_inbox_takes_its_own_candidates_once(run):
     again = candidate(1, attempt=1)                                       # sent again
     assert inbox.candidate_arrived(again) == [again]
     assert same_task(inbox.job(again).task, run[1])
+    # every message given counts, its own or not: the evaluator takes messages while it grows
+    assert inbox.heard == 5
 
 
 def test_an_inbox_for_one_run_ignores_the_others(run):

@@ -100,6 +100,7 @@ class EvaluatorInbox:
         self.evaluator_id = evaluator_id
         self.credential = credential
         self.rejected = 0   # RunInfos and Candidates ignored: signature missing or wrong
+        self.heard = 0      # RunInfos and Candidates given to it, its own or not
         self._digests = {}  # run id -> SHA-256 of its RunInfo, which candidates' signatures cover
         self.wanted_run = wanted_run
         self.run_info_wait = run_info_wait
@@ -114,6 +115,7 @@ class EvaluatorInbox:
 
     def run_announced(self, run):
         """Take a RunInfo; return the candidates that were waiting for it."""
+        self.heard += 1
         if not self._serves(run.run_id):
             return []
         if self.credential is not None:
@@ -142,6 +144,7 @@ class EvaluatorInbox:
 
     def candidate_arrived(self, candidate):
         """Return [candidate] if it is to be evaluated now, [] if not ours, seen or waiting."""
+        self.heard += 1
         if candidate.evaluator_id not in ('', self.evaluator_id):
             return []
         if not self._serves(candidate.run_id):

@@ -1,13 +1,11 @@
 """
 The evaluator node: evaluates candidates with hand_codesign.core.evaluate and answers them.
 
-Which candidates it takes and what it evaluates are core.evaluation_jobs' rules; the node
-learns runs from the latched RunInfo and answers each candidate taken with an Evaluation or a
-rejection with the reason, never a crash; with a key (ros.keys) it takes only signed messages
-and signs its answers. One thread does it all: between candidates and between the worlds of
-one, `spin` lets the executor take what arrived and beat the heartbeat (every POLL_PERIOD at
-most). An executor thread of its own would compete with PyBullet for the interpreter lock:
-under rclpy's MultiThreadedExecutor the same evaluations took about 25 % longer.
+Which candidates it takes and what it evaluates are core.evaluation_jobs' rules; it answers
+each candidate taken with an Evaluation or a rejection with the reason, never a crash; with a
+key (ros.keys) it takes only signed messages and signs its answers. One thread does it all:
+between candidates and worlds (every POLL_PERIOD at most) it takes what arrived and beats the
+heartbeat. Under rclpy's MultiThreadedExecutor the same evaluations took about 25 % longer.
 """
 
 import collections
@@ -26,6 +24,7 @@ from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.keys import evaluator_credential
 from hand_codesign.ros.keys import sign_evaluation
 from hand_codesign.ros.node_main import run_node
+from hand_codesign.ros.node_main import take_arrived
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import EvaluatorStatus
 import rclpy
@@ -57,14 +56,15 @@ class EvaluatorNode(Node):
                                     credential=self.key)
         self.work = collections.deque()  # candidates taken; the first is being evaluated
         self.done, self.steps_per_second = 0, 0.0
-        self.messages_taken = 0  # RunInfos and Candidates heard, to take all that arrived
         # the first heartbeat goes out the moment the subscribers match, not a period later
         matched = PublisherEventCallbacks(matched=lambda status: self.publish_status())
         self.evaluations, self.status = (self.create_publisher(
             topics.MESSAGE_TYPES[name], name, topics.QOS[name], event_callbacks=matched)
             for name in (topics.EVALUATIONS, topics.EVALUATOR_STATUS))
-        for name, callback in ((topics.RUN_INFO, self.on_run_info),
-                               (topics.CANDIDATES, self.on_candidate)):
+        inbox = self.inbox
+        for name, callback in (
+                (topics.RUN_INFO, lambda run: self.work.extend(inbox.run_announced(run))),
+                (topics.CANDIDATES, lambda one: self.work.extend(inbox.candidate_arrived(one)))):
             self.create_subscription(topics.MESSAGE_TYPES[name], name, callback,
                                      topics.QOS[name])
         self.create_timer(self.settings['heartbeat_period'], self.publish_status)
@@ -89,21 +89,7 @@ class EvaluatorNode(Node):
 
     def take_arrived(self, timeout):
         """Take every message that arrived (waiting up to timeout s for the first one)."""
-        # spin_once runs one callback: one at a time, the candidates addressed to the other
-        # evaluators kept this one's next candidate waiting until it had run dry
-        taken = self.messages_taken
-        self.executor.spin_once(timeout_sec=timeout)
-        while self.messages_taken > taken:
-            taken = self.messages_taken
-            self.executor.spin_once(timeout_sec=0.0)
-
-    def on_run_info(self, message):
-        self.messages_taken += 1
-        self.work.extend(self.inbox.run_announced(message))
-
-    def on_candidate(self, message):
-        self.messages_taken += 1
-        self.work.extend(self.inbox.candidate_arrived(message))
+        take_arrived(self.executor, lambda: self.inbox.heard, timeout)
 
     def work_off(self):
         """Evaluate and answer the first queued candidate (unless ROS shuts down meanwhile)."""
@@ -155,8 +141,7 @@ def farewell(node):
 
 
 def main(args=None):
-    return run_node(EvaluatorNode, 'evaluator', args, farewell=farewell,
-                    spin=EvaluatorNode.spin)
+    return run_node(EvaluatorNode, 'evaluator', args, farewell=farewell, spin=EvaluatorNode.spin)
 
 
 if __name__ == '__main__':

@@ -71,3 +71,18 @@ def on_line(stream, node, callback):
 
     threading.Thread(target=wait, daemon=True).start()
     return arrived
+
+
+def take_arrived(executor, heard, timeout):
+    """
+    Run the callbacks of every message that arrived, waiting up to timeout s for the first.
+
+    rclpy's spin_once runs one callback. heard() counts the messages the node's callbacks
+    took: while it grows, more may be waiting (an evaluator hears every evaluator's candidates,
+    and one at a time they kept its own next candidate waiting until it had run dry).
+    """
+    count = heard()
+    executor.spin_once(timeout_sec=timeout)
+    while heard() > count:
+        count = heard()
+        executor.spin_once(timeout_sec=0.0)
