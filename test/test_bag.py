@@ -1,5 +1,6 @@
 """read_run gives a run back from its bag, and says clearly what is wrong with a bad one."""
 
+from analysis_run import decoded_messages
 from bag_samples import dds_bytes
 from bag_samples import interleaved
 from bag_samples import sample_messages
@@ -15,7 +16,6 @@ from hand_codesign.ros.mcap_writer import BagWriter
 from hand_codesign.ros.mcap_writer import message_definition
 from mcap.reader import make_reader
 from mcap.writer import Writer
-from mcap_ros2.decoder import DecoderFactory
 import numpy as np
 import pytest
 from rclpy.serialization import serialize_message
@@ -271,10 +271,7 @@ def test_outcomes_read_back_with_our_reader_and_independent_ones(tmp_path):
     assert record.evaluations['outcome_names'][0] == ('limit_rest', 'touch')
     told = records.told_outcomes(record)
     assert told[3][0] == ('limit_rest', 'touch') and told[3][1].tolist() == [3 / 16, 0.75]
-    with open(path, 'rb') as stream:
-        decoded = [message for _, _, _, message in make_reader(
-            stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages(
-            topics=['/' + topics.EVALUATIONS])]
+    decoded = decoded_messages(path, topics.EVALUATIONS)
     with AnyReader([path]) as reader:
         connections = [c for c in reader.connections if c.topic == '/' + topics.EVALUATIONS]
         independent = [reader.deserialize(raw, connection.msgtype)

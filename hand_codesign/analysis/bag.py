@@ -421,8 +421,7 @@ def _with_later_fields(type_name, table):
         if name not in table.columns:
             if kind == 'names':
                 column = np.empty(len(table), dtype=object)
-                for row in range(len(table)):
-                    column[row] = ()
+                column.fill(())  # no names in any row
             else:
                 column = np.zeros((len(table), 0))
             table.columns[name] = column
