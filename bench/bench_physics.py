@@ -5,9 +5,11 @@ Measures, in one run:
 - the designs: --designs candidates spread evenly over a seeded CMA-ES search on Task 5
   (Table I's settings, --generations x --popsize), those that are simulated (no start
   collision), with their fitness;
-- speed: evaluate() with the cheaper settings over a sample of those designs against today's
-  reference, bench_core's bare loop (stepping and torques only, Table I's settings), in
-  interleaved rounds, best of 3 (target >= 1.6);
+- speed: evaluate() with the cheaper settings over a sample of those designs against
+  bench_core's bare loop (stepping and torques only, Table I's settings), in interleaved
+  rounds, best of 3; and against the same bare loop on the PyPI wheel's PyBullet, in a process
+  of its own (bench_pybullet_build's worker): the issue's "today's bare loop", from before
+  `make setup` built PyBullet itself (target >= 1.6: the cheaper physics on top of the build);
 - ranking: Spearman's rank correlation of the designs' fitness under both settings (target
   >= 0.98);
 - robustness: the best designs on a grid of world states (`grid_world_states`, 3 values per
@@ -21,9 +23,12 @@ Usage: python bench/bench_physics.py [--solver-iterations 5]
 
 import argparse
 import os
+import pathlib
+import tempfile
 import time
 
 from bench_core import bare_loop
+from bench_pybullet_build import build_pybullet, measure
 from hand_codesign.core.evaluate import evaluate, shared_simulator
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.objectives import goal_schedule
@@ -91,6 +96,18 @@ def speed_ratio(reference, fast, genomes, rounds=3):
     return reference_steps / seconds[0], steps / seconds[1]
 
 
+def wheel_bare_rate(genomes, rounds=3):
+    """Return the PyPI wheel's bare-loop rate on `genomes` (steps per CPU second), or None."""
+    wheel = build_pybullet.wheel_copy()
+    if not wheel.exists():
+        return None  # the installed PyBullet is the wheel: the reference above is the same
+    with tempfile.TemporaryDirectory() as folder:
+        genomes_file = pathlib.Path(folder) / 'genomes.npy'
+        np.save(genomes_file, np.array(genomes))
+        run = measure(wheel.parent, genomes_file, rounds)
+    return run['steps']['bare'] / run['bare']
+
+
 def robustness_change(reference, fast, genomes, fitness, count):
     """Print the final-error percentiles of the best designs under both settings."""
     worst = 0.0
@@ -128,14 +145,21 @@ def main():
     fast_fitness = np.array([evaluate(x, fast).fitness for x in genomes])
     sample = genomes[::max(1, len(genomes) // arguments.speed_sample)][:arguments.speed_sample]
     raw, rate = speed_ratio(reference, fast, sample)
+    wheel = wheel_bare_rate(sample)
     print(f'Task 5, physics {fast.physics} against the Table I defaults {reference.physics} '
           f'({time.strftime("%H:%M:%S")})')
     print(f'  {len(genomes)} designs over a CMA-ES run ({arguments.generations} x '
           f'{arguments.popsize}, {arguments.world_states} worlds), fitness {fitness.min():.4f} to '
           f'{fitness.max():.4f}')
     print(f'  bare loop, Table I physics      {raw:9.0f} steps/s')
-    print(f'  evaluate(), cheaper physics     {rate:9.0f} steps/s')
-    print(f'  speed-up {rate / raw:.3f}   (target >= 1.6)')
+    print(f'  evaluate(), cheaper physics     {rate:9.0f} steps/s   '
+          f'{rate / raw:.3f} of the bare loop')
+    if wheel is None:
+        print("  (no copy of the PyPI wheel: the bare loop above is the wheel's)")
+        wheel = raw
+    else:
+        print(f'  bare loop, Table I physics, PyPI wheel {wheel:9.0f} steps/s')
+    print(f"  speed-up {rate / wheel:.3f} against the wheel's bare loop   (target >= 1.6)")
     print(f'  Spearman rank correlation of the fitness {spearman(fitness, fast_fitness):.4f}'
           '   (target >= 0.98)')
     print('  robustness of the best designs (3^6 = 729 world states):')
