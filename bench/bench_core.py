@@ -86,12 +86,36 @@ def bare_loop(task, x, simulator, with_torques):
     return elapsed
 
 
+def torque_calls(task, x, simulator):
+    """
+    Return the seconds of the bare loop's torque calls alone, without stepping.
+
+    The rollout loop makes two calls into PyBullet per step, this and stepSimulation; this
+    says how much of a step is the Python call, the most any loop with fewer calls could gain.
+    """
+    design = genome_spec(task).decode(x)
+    model = hand_model(design.hand, task.hand)
+    policy = make_policy(task.policy, design.controller, model.initial_angles, task.time_step)
+    steps = simulator.plan(goal_schedule(task)).num_steps
+    simulator.build(task, model)
+    rows = policy.schedule(steps)
+    set_torques = simulator.client.setJointMotorControlArray
+    joints, hand = list(range(model.num_joints)), simulator.hand
+    torque_control = simulator.client.TORQUE_CONTROL
+    start = time.process_time()
+    for _ in world_states(task):
+        for step in range(steps):
+            set_torques(hand, joints, torque_control, forces=rows[step])
+    return time.process_time() - start
+
+
 def bench_rate(task, count, rounds=3):
     """Print (a): evaluation steps per second against the bare loops."""
     simulator = shared_simulator()
     genomes = candidates(task, count, seed=1)
     evaluate(genomes[0], task)
     timing = np.zeros(3)
+    calls = 0.0
     steps = 0
     for x in genomes:
         # Interleaved rounds, and each candidate's fastest round of each loop: the least
@@ -105,6 +129,7 @@ def bench_rate(task, count, rounds=3):
                                                        bare_loop(task, x, simulator, False),
                                                        bare_loop(task, x, simulator, True)))
         timing += rounds_timing
+        calls += min(torque_calls(task, x, simulator) for _ in range(rounds))
         steps += int(round(result.simulated_time / task.time_step))
     rates = steps / timing
     print(f'(a) evaluation rate, {count} candidates x {task.num_world_states} worlds, '
@@ -114,6 +139,10 @@ def bench_rate(task, count, rounds=3):
           '  (target >= 0.90)')
     print(f'    bare, stepping only   {rates[1]:9.0f} steps/s   ratio {rates[0] / rates[1]:.3f}'
           '  (limp hand: other contacts)')
+    bare_steps = count * task.num_world_states * simulator.plan(goal_schedule(task)).num_steps
+    call, step = calls / bare_steps, timing[2] / bare_steps
+    print(f'    torque call alone     {call * 1e6:9.2f} us of {step * 1e6:.2f} us per bare step '
+          f'({call / step:.3f}: the most fewer Python calls per step could save)')
 
 
 def bench_build(task, repeats):
@@ -140,8 +169,12 @@ def bench_build(task, repeats):
 
 def short_task(task, duration=0.05):
     """Return the task with a rollout of `duration` seconds (goal and policy shortened)."""
-    goal = dataclasses.replace(task.goals.position[0], time=duration)
-    goals = dataclasses.replace(task.goals, position=(goal,))
+    goals = dataclasses.replace(
+        task.goals,
+        position=tuple(dataclasses.replace(goal, time=duration)
+                       for goal in task.goals.position[:1]),
+        orientation=tuple(dataclasses.replace(goal, time=duration)
+                          for goal in task.goals.orientation[:1]))
     policy = dataclasses.replace(task.policy, duration=duration)
     return task.replace(duration=duration, goals=goals, policy=policy)
 
