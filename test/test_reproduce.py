@@ -135,6 +135,16 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
         assert task.archive.descriptors == ('joint_range', 'limit_rest')
         assert task.replace(algorithm='cma', archive=None, source_text='') == parse_task(
             text).replace(source_text='')
+    # the probe of the diagonal hand on the smaller half of the boxes: trained and measured
+    # there alone, nothing else changed
+    probe, = [c for c in experiments.EXPERIMENTS['levers-task6'].configurations
+              if c.key == 'cma-diagonal-smaller-boxes']
+    text = (experiments.pinned_dir() / probe.preset).read_text()
+    task = parse_task(experiments.configuration_task_text(probe, text))
+    scales = [world.scale for world in unseen_world_states(task, 300)]
+    assert 0.5 <= min(scales) < 0.55 and 0.95 < max(scales) <= 1.0
+    assert task.replace(randomization=parse_task(text).randomization,
+                        source_text='') == parse_task(text).replace(source_text='')
     reduced = levers.budget('reduced')
     assert (reduced.iterations, reduced.population, reduced.seeds) == (40, 40, 5)
     assert experiments.training_worlds(by_key['cma'], reduced) == 16
