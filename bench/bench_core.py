@@ -50,6 +50,16 @@ def candidates(task, count, seed, sigma=0.1):
     return chosen
 
 
+def built_candidate(task, x, simulator):
+    """Build the candidate's hand in `simulator`; return (model, torque rows, steps)."""
+    design = genome_spec(task).decode(x)
+    model = hand_model(design.hand, task.hand)
+    policy = make_policy(task.policy, design.controller, model.initial_angles, task.time_step)
+    steps = simulator.plan(goal_schedule(task)).num_steps
+    simulator.build(task, model)
+    return model, policy.schedule(steps), steps
+
+
 def bare_loop(task, x, simulator, with_torques):
     """
     Return the seconds of a bare loop over the candidate's worlds, in a freshly built scene.
@@ -57,13 +67,8 @@ def bare_loop(task, x, simulator, with_torques):
     Each world starts as in evaluate() (hand reset, the world's object created, untimed);
     only the stepping is timed: stepSimulation alone, or with the candidate's torques.
     """
-    design = genome_spec(task).decode(x)
-    model = hand_model(design.hand, task.hand)
-    policy = make_policy(task.policy, design.controller, model.initial_angles, task.time_step)
-    steps = simulator.plan(goal_schedule(task)).num_steps
-    simulator.build(task, model)
+    model, rows, steps = built_candidate(task, x, simulator)
     client = simulator.client
-    rows = policy.schedule(steps)
     step_simulation = client.stepSimulation
     set_torques = client.setJointMotorControlArray
     joints, hand, torque_control = list(range(model.num_joints)), simulator.hand, \
@@ -93,12 +98,7 @@ def torque_calls(task, x, simulator):
     The rollout loop makes two calls into PyBullet per step, this and stepSimulation; this
     says how much of a step is the Python call, the most any loop with fewer calls could gain.
     """
-    design = genome_spec(task).decode(x)
-    model = hand_model(design.hand, task.hand)
-    policy = make_policy(task.policy, design.controller, model.initial_angles, task.time_step)
-    steps = simulator.plan(goal_schedule(task)).num_steps
-    simulator.build(task, model)
-    rows = policy.schedule(steps)
+    model, rows, steps = built_candidate(task, x, simulator)
     set_torques = simulator.client.setJointMotorControlArray
     joints, hand = list(range(model.num_joints)), simulator.hand
     torque_control = simulator.client.TORQUE_CONTROL
