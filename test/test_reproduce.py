@@ -366,6 +366,18 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
     assert 'x' in json.loads(cached.read_text())['worlds']['errors']
     assert (out / 'tiny.md').read_text().count('| torque-') == 2
 
+    # the convergence figure has a panel for each configuration with runs, none for the rest
+    configurations = tuple(
+        experiments.Configuration(key, 'task5.yaml', algorithm, worlds, 'torque')
+        for key, algorithm, worlds in (('torque-cma-2w', 'cma', 2),
+                                       ('never-run', 'cma', 2),
+                                       ('torque-mocma-16w', 'mocma', 16)))
+    tiny = experiments.Experiment('tiny', '', configurations, tolerance, {})
+    panels = campaign.convergence_panels(out, tiny, seeds=1)
+    assert [label for label, _ in panels] == ['torque-cma-2w (CMA-ES)',
+                                              'torque-mocma-16w (MO-CMA-ES)']
+    assert all(len(told) == len(best) > 0 for _, curves in panels for _, (told, best) in curves)
+
 
 def test_only_names_configurations_of_the_experiment(capsys):
     assert cli.main(['reproduce', 'levers-task6', '--only', 'cma-diagonal', 'nope']) == 2

@@ -328,6 +328,17 @@ def run_generations(bags):
     return np.asarray(told, dtype=float), np.minimum.accumulate(np.asarray(best, dtype=float))
 
 
+def convergence_panels(out, experiment, seeds):
+    """Return (label, [(seed, (told, best))]) of each configuration with runs in `out`."""
+    panels = []
+    for configuration in experiment.configurations:
+        curves = [(seed, run_generations(attempts(out / 'runs', run_key(configuration, seed))))
+                  for seed in range(1, seeds + 1)]
+        if any(len(told) for _, (told, _) in curves):  # `--only` leaves the others unrun
+            panels.append((f'{configuration.key} ({configuration.algorithm_name})', curves))
+    return panels
+
+
 def plot_convergence(path, panels, title):
     """Best fitness so far against evaluations, a panel per configuration, a line per seed."""
     import matplotlib
@@ -474,14 +485,9 @@ def write_results(out, experiment, budget, seeds):
                   markdown_table(rows, experiment.tolerance, 'structure'),
                   f'![{figure.name}]({figure.name})', '']
         paths += [out / f'{name}-structures.csv', figure]
-    if experiment.convergence:
+    panels = convergence_panels(out, experiment, seeds) if experiment.convergence else []
+    if panels:
         figure = out / f'{name}-convergence.png'
-        panels = []
-        for configuration in experiment.configurations:
-            curves = [(seed, run_generations(attempts(out / 'runs',
-                                                      run_key(configuration, seed))))
-                      for seed in range(1, seeds + 1)]
-            panels.append((f'{configuration.key} ({configuration.algorithm_name})', curves))
         plot_convergence(figure, panels, f'{name}, {budget.name} budget')
         lines += ['## Convergence', '', f'![{figure.name}]({figure.name})', '']
         paths.append(figure)
