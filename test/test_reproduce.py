@@ -145,6 +145,16 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
     assert 0.5 <= min(scales) < 0.55 and 0.95 < max(scales) <= 1.0
     assert task.replace(randomization=parse_task(text).randomization,
                         source_text='') == parse_task(text).replace(source_text='')
+    # the fingers placed closer to the box: nothing else changed
+    for key, placement in (('cma-diagonal-fingers-60mm', 0.06),
+                           ('cma-diagonal-fingers-45mm', 0.045)):
+        closer, = [c for c in experiments.EXPERIMENTS['levers-task6'].configurations
+                   if c.key == key]
+        task = parse_task(experiments.configuration_task_text(closer, text))
+        assert task.morphology.finger_position_x.values == (-placement, placement)
+        pinned = parse_task(text)
+        assert task.replace(morphology=pinned.morphology, source_text='') == pinned.replace(
+            source_text='')
     reduced = levers.budget('reduced')
     assert (reduced.iterations, reduced.population, reduced.seeds) == (40, 40, 5)
     assert experiments.training_worlds(by_key['cma'], reduced) == 16
