@@ -25,7 +25,8 @@ presets' lever, a preset choice of ours revisited: Task 5 scored along the finge
 alone (`task5_along_x.yaml`; its tables give the shares within 5 mm along x and along y
 beside the share in the plane for every configuration) and Task 6's hand turned to squeeze
 along the goal's diagonal (`task6_diagonal.yaml`), which `levers-task6` also runs with other
-choices of its preset changed (gravity compensation, finger friction, torque bound). On
+choices of its preset changed (gravity compensation, finger friction, torque bound, finger
+placement) and on the smaller half of the boxes alone. On
 each of these two presets CMA-MAE also spans its archive by an outcome of the rollouts
 (`cma-mae-limit-rest-along-x`, `cma-mae-limit-rest-diagonal`: the joint-limit span and
 limit_rest, the share of worlds in which a design ends on a joint limit while touching the
@@ -163,8 +164,8 @@ def _diagonal_hand_configurations():
     fingers' strength is what limits the squeeze. And a probe, not a preset: the smaller half
     of the boxes alone (scales 0.5 to 1), trained and measured there, to see whether the
     hand can turn them at all when it need not also turn the larger ones. Last, the fingers
-    placed closer to the box, 6 and 4.5 cm from its centre instead of 8.5 (the preset places
-    them beside the largest box's corner): above the larger boxes, they must start splayed
+    placed closer to the box, 6 and 4.5 cm from its centre instead of the pinned preset's 8.5
+    (beside the largest box's corner): above the larger boxes, they must start splayed
     outwards to clear them, and reach the smaller ones with less of Table I's torque.
     """
     variants = (('gravity', (('policy.gravity_compensation', True),)),
