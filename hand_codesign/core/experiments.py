@@ -180,6 +180,20 @@ def _diagonal_hand_configurations():
                  for name, options in variants)
 
 
+def _palm_beside_configuration(name):
+    """
+    Return CMA-ES on a task's fixed hand read the other way: the palm beside the box.
+
+    Table I fixes Tasks 5 and 6's joint axes without saying which way they point. The pinned
+    presets hang the palm above the box, the fingers swinging in a vertical plane; this
+    one stands the palm upright beside the box, the fingers at its height swinging parallel
+    to the table, so that segments held at their limits can form a wall in the plane, as in
+    Figs. 4 and 5 (issue 26: the reading is chosen on tuning seeds 1 to 3).
+    """
+    return Configuration('cma-palm-beside', f'{name}_palm_beside.yaml', 'cma', LEVER_WORLDS,
+                         'torque')
+
+
 def _lever_budgets(paper_worlds):
     """Return issue 12's budgets: 40 x 40 on 16 worlds, and Table I's, each over 5 seeds."""
     return {'smoke': Budget('smoke', 4, 8, 100, 1, world_states=4),
@@ -231,7 +245,8 @@ EXPERIMENTS = {
         'each generation and quality diversity (CMA-MAE), on the same evaluations; and the '
         "position scored along the fingers' axis alone (x), where the hand can move the box",
         _lever_configurations('task5.yaml')
-        + _preset_lever_configurations('task5_along_x.yaml', 'along-x'), PLANE_5MM,
+        + _preset_lever_configurations('task5_along_x.yaml', 'along-x')
+        + (_palm_beside_configuration('task5'),), PLANE_5MM,
         _lever_budgets(64), convergence=True, beyond_paper=True,
         also=(ALONG_X_5MM, ALONG_Y_5MM)),
     'levers-task6': Experiment(
@@ -243,7 +258,8 @@ EXPERIMENTS = {
         'measured on the smaller half of the boxes alone',
         _lever_configurations('task6.yaml')
         + _preset_lever_configurations('task6_diagonal.yaml', 'diagonal')
-        + _diagonal_hand_configurations(), ORIENTATION_01,
+        + _diagonal_hand_configurations() + (_palm_beside_configuration('task6'),),
+        ORIENTATION_01,
         _lever_budgets(128),
         convergence=True, beyond_paper=True),
 }
