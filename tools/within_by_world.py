@@ -2,7 +2,7 @@
 Which unseen worlds a campaign's designs fail on: the share within per band of one quantity.
 
     python tools/within_by_world.py results/levers-task6-reduced levers-task6 \
-        [--quantity scale] [--bands 0.5 0.75 1 1.25 1.5 2] [--seeds 5]
+        [--quantity scale] [--bands 0.5 0.75 1 1.25 1.5 2] [--seeds 5 | 101-105]
 
 Reads the campaign's cached measures (no simulation): each run's final errors on its unseen
 worlds, which `core.measures.unseen_world_states` draws again from the run's seed and the
@@ -14,7 +14,7 @@ mass) into the bands given; each band gets its worlds and its share within the t
 import argparse
 
 from hand_codesign.analysis.campaign import load_measures
-from hand_codesign.core.experiments import EXPERIMENTS
+from hand_codesign.core.experiments import EXPERIMENTS, parse_seeds
 from hand_codesign.core.measures import shares_in_bands, unseen_world_states
 from hand_codesign.core.robustness import world_values
 from hand_codesign.core.task import load_task
@@ -40,7 +40,8 @@ def main():
     parser.add_argument('experiment', choices=sorted(EXPERIMENTS))
     parser.add_argument('--quantity', default='scale', choices=QUANTITIES)
     parser.add_argument('--bands', type=float, nargs='+', default=[0.5, 0.75, 1, 1.25, 1.5, 2])
-    parser.add_argument('--seeds', type=int, default=5)
+    parser.add_argument('--seeds', type=parse_seeds, default='5',
+                        help='N (1 to N), A-B or A,B,...')
     arguments = parser.parse_args()
     experiment = EXPERIMENTS[arguments.experiment]
     tolerance = experiment.tolerance

@@ -17,8 +17,10 @@ Measures (core.measures): each run's final design (the optimizer's choice, the f
 GenerationSummary's `best_x`) on the budget's unseen worlds of the run's seed. Per
 configuration over its seeds: the unseen worlds of all seeds pooled: the share within the
 tolerance, the median and 90th percentile of the error; **joint limits found**: the share of
-seeds whose design rests on a joint limit while touching the box in at least half of its
-worlds.
+seeds whose design found them (core.measures: it ends within the tolerance resting on a limit
+it reached, touching the box, in at least half of its successes and a quarter of its worlds);
+beside it, the mean share of the worlds that are such limit successes, and the looser
+earlier measure (resting on a limit while touching, whatever the outcome).
 """
 
 import dataclasses
@@ -28,10 +30,11 @@ import pathlib
 from hand_codesign.analysis import records
 from hand_codesign.analysis.report import Generations, generations_from_summaries, write_csv
 from hand_codesign.core.experiments import (ALONG_X_5MM, ALONG_Y_5MM, ORIENTATION_01,
-                                            PLANE_5MM, POSITION_5MM, run_key,
-                                            training_worlds)
+                                            PLANE_5MM, POSE, POSITION_5MM, run_key,
+                                            seeds_text, training_worlds)
 from hand_codesign.core.measures import (DesignMeasures, measure_worlds, shares_in_bands,
-                                         summarize, unseen_world_states, WorldMeasures)
+                                         summarize, unseen_world_states, with_pose_error,
+                                         WorldMeasures)
 from hand_codesign.core.robustness import world_values
 from hand_codesign.core.worlds import QUANTITIES
 from hand_codesign.errors import UserError
@@ -108,17 +111,20 @@ def world_measures_dict(measures):
             'initial_errors': {kind: values.tolist()
                                for kind, values in measures.initial_errors.items()},
             'collisions': measures.collisions.tolist(),
-            'limit_contacts': measures.limit_contacts.tolist()}
+            'limit_contacts': measures.limit_contacts.tolist(),
+            'limit_reached': measures.limit_reached.tolist()}
 
 
 def world_measures_of(values):
     """Return the WorldMeasures of world_measures_dict()'s output."""
     return WorldMeasures(
-        {kind: np.asarray(errors, dtype=float) for kind, errors in values['errors'].items()},
-        {kind: np.asarray(errors, dtype=float)
-         for kind, errors in values['initial_errors'].items()},
+        with_pose_error({kind: np.asarray(errors, dtype=float)
+                         for kind, errors in values['errors'].items()}),
+        with_pose_error({kind: np.asarray(errors, dtype=float)
+                         for kind, errors in values['initial_errors'].items()}),
         np.asarray(values['collisions'], dtype=bool),
-        np.asarray(values['limit_contacts'], dtype=bool))
+        np.asarray(values['limit_contacts'], dtype=bool),
+        np.asarray(values['limit_reached'], dtype=bool))
 
 
 def measure_bag(bag, tolerance, unseen_worlds, processes=1):
@@ -169,12 +175,20 @@ def cached_measures(path, compute, kinds=()):
 
 
 def read_measures(path, kinds=()):
-    """Return the measures record at path, or None if it is missing or lacks an error kind."""
+    """
+    Return the measures record at path, or None if it must be measured (again).
+
+    A record is measured again when it lacks an error kind, or predates the measures of
+    issue 26 (rollouts run to their end, the limit a joint reached): its 'limit_reached'.
+    The pose error is derived from the plane and orientation errors, never stored.
+    """
     path = pathlib.Path(path)
     if not path.exists():
         return None
     values = json.loads(path.read_text(encoding='utf-8'))
-    if any(kind not in values['worlds']['errors'] for kind in kinds):
+    if 'limit_reached' not in values['worlds']:
+        return None
+    if any(kind not in values['worlds']['errors'] for kind in kinds if kind != 'pose'):
         return None
     return values
 
@@ -201,6 +215,7 @@ def pooled_row(measured, tolerance):
             'joint_limits_found': found,
             'joint_limits_found_share': found / len(measured),
             'limit_contact_share': float(np.mean([s.limit_contact_share for s in summaries])),
+            'limit_success_share': float(np.mean([s.limit_success_share for s in summaries])),
             'collision_share': float(np.mean([s.collision_share for s in summaries]))}
 
 
@@ -209,12 +224,12 @@ TABLE_COLUMNS = ('experiment', 'configuration', 'preset', 'policy', 'algorithm',
                  'unseen_worlds', 'tolerance', 'unit', 'within', 'within_by_seed', 'median',
                  'p90',
                  'initial_median', 'joint_limits_found', 'joint_limits_found_share',
-                 'limit_contact_share', 'collision_share')
+                 'limit_success_share', 'limit_contact_share', 'collision_share')
 
 
 def error_unit(tolerance):
-    """Return the SI unit of a tolerance's error."""
-    return 'rad' if tolerance.kind == 'orientation' else 'm'
+    """Return the SI unit of a tolerance's error (a pose error counts in its tolerances)."""
+    return {'orientation': 'rad', 'pose': 'tolerances'}.get(tolerance.kind, 'm')
 
 
 def write_table(out, name, rows, also=()):
@@ -241,9 +256,11 @@ def percent(share):
 
 
 def error_text(value, tolerance):
-    """Return an error in the table's unit: mm for distances, rad for angles."""
+    """Return an error in the table's unit: mm for distances, rad for angles, x for poses."""
     if tolerance.kind == 'orientation':
         return f'{value:.3f} rad'
+    if tolerance.kind == 'pose':
+        return f'{value:.2f} x'
     return f'{value * 1000:.1f} mm'
 
 
@@ -252,8 +269,9 @@ def markdown_table(rows, tolerance, first='configuration', also=()):
     further = ''.join(f'within ({other.describe()}) | each seed (%) | ' for other in also)
     lines = [f'| {first} | policy | algorithm | training worlds | seeds | unseen worlds | '
              f'within ({tolerance.describe()}) | each seed (%) | {further}median | p90 | '
-             'median at the start | joint limits found |',
-             '|---' * (12 + 2 * len(also)) + '|']
+             'median at the start | limit successes | on a limit, touching (any outcome) | '
+             'joint limits found |',
+             '|---' * (14 + 2 * len(also)) + '|']
     for row in rows:
         shares = [(row['within'], row['within_by_seed'])] + [
             (row[also_column(other)], row[also_column(other) + '_by_seed']) for other in also]
@@ -264,6 +282,7 @@ def markdown_table(rows, tolerance, first='configuration', also=()):
                       for pooled, by_seed in shares)
             + f'{error_text(row["median"], tolerance)} | {error_text(row["p90"], tolerance)} | '
             f'{error_text(row["initial_median"], tolerance)} | '
+            f'{percent(row["limit_success_share"])} | {percent(row["limit_contact_share"])} | '
             f'{percent(row["joint_limits_found_share"])} ({row["joint_limits_found"]} of '
             f'{row["seeds"]}) |')
     return '\n'.join(lines) + '\n'
@@ -288,7 +307,8 @@ def plot_errors(path, groups, tolerance, title, kinds=None):
     figure, axes = pyplot.subplots(1, len(kinds), figsize=(width * len(kinds), 4.5),
                                    squeeze=False)
     for axis, kind in zip(axes[0], kinds):
-        scale, unit = (1.0, 'rad') if kind == 'orientation' else (1000.0, 'mm')
+        scale, unit = {'orientation': (1.0, 'rad'), 'pose': (1.0, 'tolerances')}.get(
+            kind, (1000.0, 'mm'))
         data, positions = [], []
         for index, (_, measured) in enumerate(groups):
             for offset, field in ((-0.18, 'initial_errors'), (0.18, 'errors')):
@@ -329,11 +349,11 @@ def run_generations(bags):
 
 
 def convergence_panels(out, experiment, seeds):
-    """Return (label, [(seed, (told, best))]) of each configuration with runs in `out`."""
+    """Return (label, [(seed, (told, best))]) of each configuration with runs of `seeds`."""
     panels = []
     for configuration in experiment.configurations:
         curves = [(seed, run_generations(attempts(out / 'runs', run_key(configuration, seed))))
-                  for seed in range(1, seeds + 1)]
+                  for seed in seeds]
         if any(len(told) for _, (told, _) in curves):  # `--only` leaves the others unrun
             panels.append((f'{configuration.key} ({configuration.algorithm_name})', curves))
     return panels
@@ -372,11 +392,11 @@ def read_campaign(out):
 
 
 def load_measures(out, experiment, seeds, suffix=''):
-    """Return {configuration key: [measures record per seed]} of a campaign folder."""
+    """Return {configuration key: [measures record per seed of `seeds`]} of a campaign folder."""
     measured = {}
     for configuration in experiment.configurations:
         records_of_seeds = []
-        for seed in range(1, seeds + 1):
+        for seed in seeds:
             path = pathlib.Path(out) / 'measures' / f'{run_key(configuration, seed)}{suffix}.json'
             if path.exists():
                 records_of_seeds.append(json.loads(path.read_text(encoding='utf-8')))
@@ -444,6 +464,7 @@ def structure_rows(experiment, budget, measured):
             row = row_head(experiment, budget, configuration,
                            f'{configuration.key} {structure}', structure=structure)
             row.update(pooled_row(structures[structure], experiment.tolerance))
+            row.update(also_columns(structures[structure], experiment.also))
             rows.append(row)
     return rows
 
@@ -457,7 +478,7 @@ def write_results(out, experiment, budget, seeds):
     paths = [out / f'{name}.csv', out / f'{name}.md', out / f'{name}.png']
     write_table(out, name, rows, experiment.also)
     lines = [f'# {name}', '', experiment.summary + '.', '',
-             f'Budget {budget.describe()}; seeds 1 to {seeds}; a row per configuration, '
+             f'Budget {budget.describe()}; {seeds_text(seeds)}; a row per configuration, '
              'the unseen worlds of its seeds pooled.', '',
              markdown_table(rows, experiment.tolerance, also=experiment.also)]
     labels = [f'{row["policy"]} {row["algorithm"]} {row["world_states"]}w' for row in rows]
@@ -472,7 +493,7 @@ def write_results(out, experiment, budget, seeds):
     if experiment.per_structure:
         by_structure = load_measures(out, experiment, seeds, '.structures')
         rows = structure_rows(experiment, budget, by_structure)
-        write_table(out, f'{name}-structures', rows)
+        write_table(out, f'{name}-structures', rows, experiment.also)
         figure = out / f'{name}-structures.png'
         plot_errors(figure, [(row['structure'], [values for record in
                                                  by_structure[row['configuration'].split()[0]]
@@ -482,7 +503,7 @@ def write_results(out, experiment, budget, seeds):
                     experiment.tolerance, f"{name}: each structure's best (Fig. 3)",
                     kinds=('position', 'orientation'))
         lines += ["## Each structure's best design (Fig. 3)", '',
-                  markdown_table(rows, experiment.tolerance, 'structure'),
+                  markdown_table(rows, experiment.tolerance, 'structure', experiment.also),
                   f'![{figure.name}]({figure.name})', '']
         paths += [out / f'{name}-structures.csv', figure]
     panels = convergence_panels(out, experiment, seeds) if experiment.convergence else []
@@ -503,7 +524,9 @@ def unseen_tolerances(task):
     from its start would read as an error ("final position irrelevant", Task 6).
     """
     position = (PLANE_5MM, POSITION_5MM, ALONG_X_5MM, ALONG_Y_5MM) if task.goals.position else ()
-    return position + ((ORIENTATION_01,) if task.goals.orientation else ())
+    orientation = (ORIENTATION_01,) if task.goals.orientation else ()
+    pose = (POSE,) if position and orientation else ()
+    return position + orientation + pose
 
 
 def scored_tolerance(task):
@@ -555,8 +578,7 @@ def unseen_report(bag, count, processes=1):
 
     The same measures as a reproduce campaign's: for each error of the task's goals
     (unseen_tolerances) the share of worlds within 5 mm or 0.1 rad, its median and p90, and
-    whether the design rests on a joint limit while touching the object in at least half of
-    the worlds (joint limits found).
+    whether the design found its joint limits (core.measures) on the error its goals score.
     """
     task, x, structure = final_design(bag)
     worlds = unseen_world_states(task, count)
@@ -573,11 +595,16 @@ def unseen_report(bag, count, processes=1):
                      f'{error_text(summary.p90, tolerance)} | '
                      f'{error_text(summary.initial_median, tolerance)} |')
     first = summaries[0]
-    lines += ['', f'Resting on a joint limit while touching the object: '
-                  f'{percent(first.limit_contact_share)} of the worlds; joint limits found '
-                  f'(at least half): {"yes" if first.joint_limits_found else "no"}. Start '
-                  f'collisions: {percent(first.collision_share)} of the worlds.', '']
     scored = scored_tolerance(task)
+    judged = summarize(measures, scored)
+    lines += ['', f'Within {scored.describe()} while resting on a joint limit it reached, '
+                  f'touching the object: {percent(judged.limit_success_share)} of the worlds, '
+                  f'{percent(judged.limit_share_of_successes)} of those within; joint limits '
+                  f'found (at least half of those within and a quarter of all): '
+                  f'{"yes" if judged.joint_limits_found else "no"}. Resting on a joint limit '
+                  f'while touching, whatever the outcome: {percent(first.limit_contact_share)} '
+                  f'of the worlds. Start collisions: {percent(first.collision_share)} of the '
+                  'worlds. Every world runs the whole motion, with no early termination.', '']
     bands = world_bands(task, worlds, measures, scored)
     lines += band_lines(bands, scored)
     record = {'bag': str(bag), 'seed': task.seed, 'unseen_worlds': count,

@@ -1,9 +1,10 @@
 """
-`hand-codesign reproduce EXPERIMENT [--budget B] [--seeds N] [--evaluators E] [--out DIR]`.
+`hand-codesign reproduce EXPERIMENT [--budget B] [--seeds S] [--evaluators E] [--out DIR]`
 
 Runs one of the paper's experiments (core.experiments; `reproduce --list` names them) as a
-campaign: every configuration once per seed 1..N, each a normal `hand-codesign run` with its
-own bag under DIR/runs/, then measures every final design on worlds it never trained on
+campaign: every configuration once per seed (`--seeds 3`: 1 to 3, the tuning seeds;
+`--seeds 101-105`: fresh seeds for headline figures; or a list `4,7`), each a normal
+`hand-codesign run` with its own bag under DIR/runs/, then measures every final design on worlds it never trained on
 (core.measures) and writes the experiment's tables (`.csv`, `.md`, a row per configuration)
 and figures into DIR (layout: hand_codesign.analysis.campaign). `--only` runs some of the
 experiment's configurations: a new lever beside a campaign that already measured the others.
@@ -46,16 +47,17 @@ def reproduce_command(arguments):
             print(f'{name}  {summary}')
         return 0
     chosen = chosen_experiments(arguments.experiment)
-    check_arguments(arguments)
+    seeds = check_arguments(arguments)
     out = pathlib.Path(arguments.out or f'results/{arguments.experiment}-{arguments.budget}')
-    campaigns = [Campaign(experiment, arguments.budget, arguments.seeds,
+    campaigns = [Campaign(experiment, arguments.budget, seeds,
                           out if len(chosen) == 1 else out / experiment.name,
                           chosen_configurations(experiment, arguments.only))
                  for experiment in chosen]
     for item in campaigns:
         item.prepare()
-        print(f'reproduce: {item.experiment.name}, budget {item.budget.describe()}; seeds 1 to '
-              f'{item.seeds}; {len(item.runs)} runs of {arguments.evaluators} evaluators; '
+        print(f'reproduce: {item.experiment.name}, budget {item.budget.describe()}; '
+              f'{experiments.seeds_text(item.seeds)}; {len(item.runs)} runs of '
+              f'{arguments.evaluators} evaluators; '
               f'folder {item.out}', flush=True)
     progress = Progress(sum(len(item.runs) for item in campaigns))
     for item in campaigns:
@@ -97,11 +99,15 @@ def chosen_configurations(experiment, keys):
 
 
 def check_arguments(arguments):
-    """Raise UserError for a bad --seeds or --evaluators."""
-    if arguments.seeds is not None and arguments.seeds < 1:
-        raise UserError(f'--seeds: expected 1 or more, got {arguments.seeds}')
+    """Return the seeds of --seeds (None: the budget's); raise UserError for a bad value."""
     if arguments.evaluators < 1:
         raise UserError(f'--evaluators: expected 1 or more, got {arguments.evaluators}')
+    if arguments.seeds is None:
+        return None
+    try:
+        return experiments.parse_seeds(arguments.seeds)
+    except ValueError as error:
+        raise UserError(str(error)) from None
 
 
 FIT_SPREAD = 2.0
@@ -175,12 +181,12 @@ class Campaign:
     def __init__(self, experiment, budget_name, seeds, out, configurations=None):
         self.experiment = experiment
         self.budget = experiment.budget(budget_name)
-        self.seeds = seeds or self.budget.seeds
+        self.seeds = tuple(seeds or range(1, self.budget.seeds + 1))
         self.out = pathlib.Path(out)
         self.runs_dir = self.out / 'runs'
         self.runs = [(configuration, seed)
                      for configuration in configurations or experiment.configurations
-                     for seed in range(1, self.seeds + 1)]
+                     for seed in self.seeds]
 
     # ---------------------------------------------------------------- setup
 
@@ -203,7 +209,7 @@ class Campaign:
             (self.out / 'tasks').mkdir(parents=True, exist_ok=True)
         except OSError as error:
             raise UserError(f'--out {self.out}: cannot create the folder: {error}') from None
-        path.write_text(json.dumps(dict(settings, seeds=self.seeds), indent=2) + '\n',
+        path.write_text(json.dumps(dict(settings, seeds=list(self.seeds)), indent=2) + '\n',
                         encoding='utf-8')
         for configuration in self.experiment.configurations:
             task_file = self.task_file(configuration)
@@ -216,7 +222,7 @@ class Campaign:
                 task_file.write_text(experiments.configuration_task_text(configuration, text),
                                      encoding='utf-8')
             try:
-                self.run_task(configuration, 1)
+                self.run_task(configuration, self.seeds[0])
             except TaskError as error:
                 raise UserError(str(error))
 
@@ -237,7 +243,7 @@ class Campaign:
         its checks) and its designs' measure on the unseen worlds; early termination and
         pycma's own stops make a run cheaper, never dearer.
         """
-        task = self.run_task(configuration, 1)
+        task = self.run_task(configuration, self.seeds[0])
         plan = preview.run_budget(task)
         return (plan['physics_steps']
                 + self.budget.unseen_worlds * self.measured_designs(plan)
@@ -358,5 +364,6 @@ class Campaign:
     def write_results(self):
         """Write the experiment's tables and figures from its runs' measures."""
         paths = campaign.write_results(self.out, self.experiment, self.budget, self.seeds)
-        print(f'reproduce: {self.experiment.name} ({self.budget.describe()}, {self.seeds} '
-              f'seeds): {", ".join(str(path) for path in paths)}', flush=True)
+        print(f'reproduce: {self.experiment.name} ({self.budget.describe()}, '
+              f'{experiments.seeds_text(self.seeds)}): '
+              f'{", ".join(str(path) for path in paths)}', flush=True)

@@ -207,6 +207,8 @@ POSITION_5MM = Tolerance('position', 0.005)
 ALONG_X_5MM = Tolerance('x', 0.005)
 ALONG_Y_5MM = Tolerance('y', 0.005)
 ORIENTATION_01 = Tolerance('orientation', 0.1)
+# Task 4: turn the box and keep its position: within 5 mm in the plane and 0.1 rad at once
+POSE = Tolerance('pose', 1.0)
 
 EXPERIMENTS = {
     'task5-joint-limits': Experiment(
@@ -226,8 +228,8 @@ EXPERIMENTS = {
         'Task 4 (turn a box 45 degrees, keep its position): the structure hierarchy with '
         'MO-CMA-ES, each structure measured on unseen worlds (Fig. 3)',
         (Configuration('hierarchy-mocma-64w', 'task4.yaml', 'mocma', 64, 'torque'),),
-        ORIENTATION_01, _budgets((2, 8, 100, 1), (20, 16, 1000, 2), (200, 150, 1000, 2)),
-        per_structure=True),
+        POSE, _budgets((2, 8, 100, 1), (20, 16, 1000, 2), (200, 150, 1000, 2)),
+        per_structure=True, also=(ORIENTATION_01, PLANE_5MM)),
     'task1-seeded': Experiment(
         'task1-seeded',
         'Task 1 seeded from the starting hand (CMA-ES; PD, and the torque variant) against '
@@ -312,6 +314,41 @@ def configuration_task_text(configuration, preset_text):
             + yaml.safe_dump(task, sort_keys=False))
 
 
+def parse_seeds(text):
+    """
+    Return the seeds a `--seeds` value names, in order, each once.
+
+    'N' is seeds 1 to N (the tuning seeds 1-3 are '3'), 'A-B' the range A to B ('101-105',
+    the fresh seeds of the headline figures), 'A,B,...' a list. Raises ValueError with what
+    was expected otherwise.
+    """
+    text = str(text).strip()
+    expected = f'--seeds: expected N (seeds 1 to N), A-B or A,B,...; got {text!r}'
+    try:
+        if re.fullmatch(r'\d+', text):
+            seeds = tuple(range(1, int(text) + 1))
+        elif re.fullmatch(r'\d+-\d+', text):
+            first, last = (int(part) for part in text.split('-'))
+            seeds = tuple(range(first, last + 1))
+        else:
+            seeds = tuple(int(part) for part in text.split(','))
+    except ValueError:
+        raise ValueError(expected) from None
+    if not seeds or min(seeds) < 1:
+        raise ValueError(expected + ' (seeds are 1 or more)')
+    return tuple(dict.fromkeys(seeds))
+
+
+def seeds_text(seeds):
+    """Return seeds as the tables name them: 'seeds 1 to 3', 'seeds 101 to 105', 'seed 4'."""
+    seeds = tuple(seeds)
+    if len(seeds) == 1:
+        return f'seed {seeds[0]}'
+    if seeds == tuple(range(seeds[0], seeds[0] + len(seeds))):
+        return f'seeds {seeds[0]} to {seeds[-1]}'
+    return 'seeds ' + ', '.join(str(seed) for seed in seeds)
+
+
 def training_worlds(configuration, budget):
     """Return the worlds per candidate of a configuration's runs at a budget."""
     return budget.world_states or configuration.world_states
@@ -323,5 +360,5 @@ def run_key(configuration, seed):
 
 
 __all__ = ['ALGORITHM_NAMES', 'Budget', 'Configuration', 'Experiment', 'EXPERIMENTS',
-           'experiment_names', 'paper_experiments', 'pinned_dir', 'run_key',
-           'training_worlds']
+           'experiment_names', 'paper_experiments', 'parse_seeds', 'pinned_dir', 'run_key',
+           'seeds_text', 'training_worlds']

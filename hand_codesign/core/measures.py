@@ -7,28 +7,40 @@ the run's seed. `unseen_world_states(task, count)` draws from another stream of 
 so the measuring worlds are disjoint from the training worlds (continuous draws; checked) and
 the first k of a larger set are the k of a smaller one.
 
+Every unseen world runs the whole motion (`full_motion`): the task's early termination and a
+candidate's horizon are what the search uses to save time, not part of what the design does,
+so a measure never reads a rollout where a training rule stopped it.
+
 Per world, from the very rollout that `core.evaluate` runs (the same simulator, design and
 policy; the measure only looks at the scene, it never changes it):
 
 - the final errors with respect to the last goal: `position` (eq. 3's distance, m, over the
   goal's axes), `plane` (the distance in the plane of the table, x and y of the world: a
   scaled box rests higher, a height no hand can change), `x` and `y` (the distance along one
-  world axis: a hand whose fingers all swing in the x-z plane pushes along x and leaves y
-  where the world put it) and `orientation` (eq. 4's angle, rad);
-- **resting on a limit while touching** (`limit_contacts`): at the end of the rollout (its
-  last step, or the goal check where early termination stopped it) some finger has a joint
-  within LIMIT_TOLERANCE of one of its limits (or past it: Bullet's limits are soft) and
-  the same finger touches the object (a contact point between any segment of that finger and
-  the object with a separation of at most CONTACT_DISTANCE). The rule is core.outcomes'
-  (`resting_on_limit_touching`), which a quality-diversity search also measures in its own
-  rollouts (the outcome descriptor limit_rest); here it is read at the last frame of a
-  rollout, so an unstable world gives the state of its last stable frame.
+  world axis), `orientation` (eq. 4's angle, rad) and `pose`, the plane and orientation errors
+  together in units of their tolerances (max(plane / 5 mm, orientation / 0.1 rad): below 1
+  when both are within, Task 4's "turn the box, keep its position");
+- **resting on a limit while touching** (`limit_contacts`): at the end of the rollout some
+  finger has a joint within LIMIT_TOLERANCE of one of its limits (or past it: Bullet's limits
+  are soft) and the same finger touches the object (a contact point between any segment of
+  that finger and the object with a separation of at most CONTACT_DISTANCE). The rule is
+  core.outcomes' (`resting_on_limit_touching`), which a quality-diversity search also
+  measures in its own rollouts (the outcome descriptor limit_rest);
+- **resting on a reached limit while touching** (`limit_reached`): the same, with a joint on
+  a limit that its initial angle was not already on (`resting_on_reached_limit_touching`).
+  Both are read at the last frame of a rollout, so an unstable world gives the state of its
+  last stable frame.
 
 Per design (`DesignMeasures`): the share of worlds within the tolerance, the median and 90th
-percentile of the error, and **joint limits found**: the design rests on a limit while
-touching in at least LIMITS_FOUND_SHARE of the worlds it did not start in collision with.
-A world the design starts in collision with is not simulated: its final error is its initial
-one and it never counts as touching.
+percentile of the error, and **joint limits found**, the paper's mechanism: in a world, the
+object ends within the tolerance while the design rests on a limit it reached, touching the
+object (a *limit success*); the design found its joint limits when its limit successes are at
+least LIMITS_FOUND_SHARE of its successes and at least LIMITS_FOUND_MIN_SHARE of all its
+worlds. So a design that leans on a limit in the worlds it fails, or that starts a joint on
+its limit and leaves it there, has not found them. The earlier, looser rule (resting on a
+limit while touching in at least half of the worlds, whatever the outcome) is kept as
+`limit_contact_share` for comparison. A world the design starts in collision with is not
+simulated: its final error is its initial one and it never counts as touching.
 """
 
 import dataclasses
@@ -37,14 +49,19 @@ from typing import Optional
 
 from hand_codesign.core.evaluate import _TaskContext, evaluate_design
 # the rule of resting on a limit while touching is core.outcomes' (evaluate uses it too)
-from hand_codesign.core.outcomes import resting_on_limit_touching
+from hand_codesign.core.outcomes import (resting_on_limit_touching,
+                                         resting_on_reached_limit_touching)
 from hand_codesign.core.robustness import map_chunks, start_and_goal_poses
 from hand_codesign.core.worlds import WorldState
 import numpy as np
 
 UNSEEN_STREAM = 11  # second entropy word of the unseen worlds' SeedSequence
-LIMITS_FOUND_SHARE = 0.5  # share of the worlds in which the design must rest on a limit
-ERROR_KINDS = ('position', 'plane', 'x', 'y', 'orientation')
+LIMITS_FOUND_SHARE = 0.5  # share of its successes that must be limit successes
+LIMITS_FOUND_MIN_SHARE = 0.25  # share of all its worlds that must be limit successes
+# the tolerances a pose error is measured in: Task 4's box turned and kept in place
+POSE_PLANE_LIMIT = 0.005  # m
+POSE_ORIENTATION_LIMIT = 0.1  # rad
+ERROR_KINDS = ('position', 'plane', 'x', 'y', 'orientation', 'pose')
 AXES = ('x', 'y')  # the error kinds along one world axis
 CHUNK = 50
 
@@ -58,6 +75,9 @@ class Tolerance:
 
     def describe(self):
         """Return e.g. 'plane error < 5 mm'."""
+        if self.kind == 'pose':
+            return (f'plane error < {POSE_PLANE_LIMIT * 1000:g} mm and orientation error < '
+                    f'{POSE_ORIENTATION_LIMIT:g} rad')
         if self.kind == 'orientation':
             return f'orientation error < {self.limit:g} rad'
         if self.kind in AXES:
@@ -77,12 +97,13 @@ def unseen_world_states(task, count):
 
 @dataclasses.dataclass(frozen=True)
 class WorldMeasures:
-    """Per world: the three final errors, start collisions, resting on a limit while touching."""
+    """Per world: the final errors, start collisions, resting on a limit while touching."""
 
     errors: dict  # kind -> (worlds,) final error
     initial_errors: dict  # kind -> (worlds,) error at the start
     collisions: np.ndarray  # (worlds,) bool
-    limit_contacts: np.ndarray  # (worlds,) bool
+    limit_contacts: np.ndarray  # (worlds,) bool: on a limit, touching (the looser rule)
+    limit_reached: np.ndarray  # (worlds,) bool: on a limit it reached, touching
     final_positions: Optional[np.ndarray] = None  # (worlds, 3) m, world frame; not cached
 
 
@@ -97,7 +118,11 @@ class DesignMeasures:
     p90: float
     initial_median: float  # the same error at the start, for comparison
     limit_contact_share: float  # share of non-colliding worlds resting on a limit, touching
-    joint_limits_found: bool
+    # limit successes (within the tolerance, on a reached limit, touching): their share of
+    # all the worlds and of the worlds within the tolerance
+    limit_success_share: float
+    limit_share_of_successes: float
+    joint_limits_found: bool  # limit successes >= half the successes, >= a quarter of all
     collision_share: float
 
     def as_dict(self):
@@ -113,19 +138,51 @@ class DesignMeasures:
 
 
 def measure_worlds(x, task, worlds, processes=1):
-    """Return the WorldMeasures of normalized genome x on `worlds` (a pool if processes > 1)."""
+    """
+    Return the WorldMeasures of a design on given worlds, each rollout run to its end.
+
+    Args:
+        x: the design's normalized genome, shape (genes,), values in [0, 1].
+        task: the Task it was found on; its early termination and horizon are dropped
+            (full_motion).
+        worlds: the WorldStates to measure on (at least one).
+        processes: worker processes (1: this one); the result does not depend on it.
+
+    Returns:
+        WorldMeasures: per world the final and initial errors of ERROR_KINDS (m or rad; pose
+        in units of its tolerances), start collisions and resting on a limit while touching.
+
+    Raises:
+        ValueError: no worlds.
+    """
     worlds = tuple(worlds)
     if not worlds:
         raise ValueError('measure_worlds needs at least one world')
+    task = full_motion(task)
     parts = map_chunks(_measure_chunk, x, task, worlds, CHUNK, processes)
-    initial, final, final_poses, collisions, contacts = (np.concatenate(column)
-                                                         for column in zip(*parts))
+    initial, final, final_poses, collisions, contacts, reached = (
+        np.concatenate(column) for column in zip(*parts))
     starts, goals = start_and_goal_poses(task, worlds)
-    errors = dict(_offsets(final_poses, goals), position=final[:, 0],
-                  orientation=final[:, 1])
-    initial_errors = dict(_offsets(starts, goals), position=initial[:, 0],
-                          orientation=initial[:, 1])
-    return WorldMeasures(errors, initial_errors, collisions, contacts, final_poses[:, :3])
+    errors = with_pose_error(dict(_offsets(final_poses, goals), position=final[:, 0],
+                                  orientation=final[:, 1]))
+    initial_errors = with_pose_error(dict(_offsets(starts, goals), position=initial[:, 0],
+                                          orientation=initial[:, 1]))
+    return WorldMeasures(errors, initial_errors, collisions, contacts, reached,
+                         final_poses[:, :3])
+
+
+def full_motion(task):
+    """Return the task without early termination or a horizon: rollouts run to the last goal."""
+    if task.early_termination is None and task.horizon is None:
+        return task
+    return task.replace(early_termination=None, horizon=None)
+
+
+def with_pose_error(errors):
+    """Return errors (kind -> per-world array) with 'pose' added from 'plane' and 'orientation'."""
+    pose = np.maximum(np.asarray(errors['plane']) / POSE_PLANE_LIMIT,
+                      np.asarray(errors['orientation']) / POSE_ORIENTATION_LIMIT)
+    return dict(errors, pose=pose)
 
 
 def _offsets(poses, goals):
@@ -142,13 +199,18 @@ def summarize(measures: WorldMeasures, tolerance: Tolerance):
     errors = measures.errors[tolerance.kind]
     simulated = ~measures.collisions
     share = (float(np.mean(measures.limit_contacts[simulated])) if simulated.any() else 0.0)
+    within = errors < tolerance.limit
+    limit_successes = within & measures.limit_reached & simulated
+    of_successes = float(limit_successes.sum() / within.sum()) if within.any() else 0.0
+    of_all = float(np.mean(limit_successes))
     return DesignMeasures(
-        worlds=int(len(errors)), tolerance=tolerance,
-        within=float(np.mean(errors < tolerance.limit)),
+        worlds=int(len(errors)), tolerance=tolerance, within=float(np.mean(within)),
         median=float(np.median(errors)), p90=float(np.percentile(errors, 90)),
         initial_median=float(np.median(measures.initial_errors[tolerance.kind])),
-        limit_contact_share=share,
-        joint_limits_found=bool(simulated.any() and share >= LIMITS_FOUND_SHARE),
+        limit_contact_share=share, limit_success_share=of_all,
+        limit_share_of_successes=of_successes,
+        joint_limits_found=bool(of_successes >= LIMITS_FOUND_SHARE
+                                and of_all >= LIMITS_FOUND_MIN_SHARE),
         collision_share=float(np.mean(measures.collisions)))
 
 
@@ -187,16 +249,18 @@ class LimitContactWatch:
     """An on_world / on_frame pair for evaluate_design: resting on a limit while touching."""
 
     def __init__(self, count):
-        self.flags = np.zeros(count, dtype=bool)
+        self.flags = np.zeros(count, dtype=bool)  # on a limit, touching
+        self.reached = np.zeros(count, dtype=bool)  # on a limit it reached, touching
         self.world = 0
 
     def on_world(self, index, simulator):
         self.world = index
-        self.flags[index] = False
+        self.flags[index] = self.reached[index] = False
 
     def on_frame(self, step, simulator):
-        # every frame overwrites the flag: the last one is the rollout's end
+        # every frame overwrites the flags: the last one is the rollout's end
         self.flags[self.world] = resting_on_limit_touching(simulator)
+        self.reached[self.world] = resting_on_reached_limit_touching(simulator)
 
 
 def _measure_chunk(job):
@@ -211,8 +275,9 @@ def _measure_chunk(job):
         parts = [_measure_chunk((x, task, (world,))) for world in worlds]
         return tuple(np.concatenate(column) for column in zip(*parts))
     return (evaluation.initial_errors, evaluation.final_errors, evaluation.final_poses,
-            np.full(len(worlds), evaluation.collision), watch.flags & ~evaluation.collision)
+            np.full(len(worlds), evaluation.collision), watch.flags & ~evaluation.collision,
+            watch.reached & ~evaluation.collision)
 
 
-__all__ = ['DesignMeasures', 'measure_design', 'measure_worlds', 'summarize', 'Tolerance',
-           'unseen_world_states', 'WorldMeasures']
+__all__ = ['DesignMeasures', 'full_motion', 'measure_design', 'measure_worlds', 'summarize',
+           'Tolerance', 'unseen_world_states', 'with_pose_error', 'WorldMeasures']

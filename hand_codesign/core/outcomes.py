@@ -51,13 +51,29 @@ def touching_links(simulator):
 
 def resting_on_limit_touching(simulator):
     """Return True if some finger has a joint on a limit and touches the current object."""
+    return _finger_on_limit_touching(simulator, on_its_limit)
+
+
+def resting_on_reached_limit_touching(simulator):
+    """
+    Return True if some finger touches the object with a joint on a limit it reached.
+
+    The stricter rule of core.measures' "joint limits found": the joint rests on a limit
+    that its initial angle was not already on (reached_its_limit), so a design that starts a
+    joint against a limit and never moves it does not count.
+    """
+    return _finger_on_limit_touching(simulator, reached_its_limit)
+
+
+def _finger_on_limit_touching(simulator, rests_on_limit):
+    """Return True if a finger touches the object while rests_on_limit(link, angle) holds."""
     client, hand, links = simulator.client, simulator.hand, simulator.model.links
     if simulator.object_body is None or not links:
         return False
     touching = touching_links(simulator)
     angles = [state[0] for state in client.getJointStates(hand, list(range(len(links))))]
     for finger in fingers(links):
-        on_limit = any(on_its_limit(links[index], angles[index]) for index in finger)
+        on_limit = any(rests_on_limit(links[index], angles[index]) for index in finger)
         if on_limit and touching.intersection(finger):
             return True
     return False
@@ -79,6 +95,17 @@ def on_its_limit(link, angle):
         return False
     return (angle <= link.lower_limit + LIMIT_TOLERANCE
             or angle >= link.upper_limit - LIMIT_TOLERANCE)
+
+
+def reached_its_limit(link, angle):
+    """Return True if a joint is on a limit (on_its_limit) that its initial angle was not on."""
+    if link.lower_limit is None:
+        return False
+    start = link.initial_angle
+    at_lower = angle <= link.lower_limit + LIMIT_TOLERANCE
+    at_upper = angle >= link.upper_limit - LIMIT_TOLERANCE
+    return ((at_lower and not start <= link.lower_limit + LIMIT_TOLERANCE)
+            or (at_upper and not start >= link.upper_limit - LIMIT_TOLERANCE))
 
 
 _RULES = {'limit_rest': resting_on_limit_touching,
@@ -143,4 +170,5 @@ def outcomes_of(value):
 
 __all__ = ['Answer', 'CONTACT_DISTANCE', 'LIMIT_TOLERANCE', 'OUTCOME_NAMES', 'OUTCOME_RANGE',
            'OutcomeWatch', 'fingers', 'objectives_of', 'on_its_limit', 'outcomes_of',
-           'resting_on_limit_touching', 'task_outcomes', 'touching_links']
+           'reached_its_limit', 'resting_on_limit_touching',
+           'resting_on_reached_limit_touching', 'task_outcomes', 'touching_links']
