@@ -248,7 +248,9 @@ EXPERIMENTS = {
         "position scored along the fingers' axis alone (x), where the hand can move the box",
         _lever_configurations('task5.yaml')
         + _preset_lever_configurations('task5_along_x.yaml', 'along-x')
-        + (_palm_beside_configuration('task5'),), PLANE_5MM,
+        + (_palm_beside_configuration('task5'),
+           Configuration('cma-palm-beside-y', 'task5_palm_beside_y.yaml', 'cma', LEVER_WORLDS,
+                         'torque')), PLANE_5MM,
         _lever_budgets(64), convergence=True, beyond_paper=True,
         also=(ALONG_X_5MM, ALONG_Y_5MM)),
     'levers-task6': Experiment(
