@@ -121,9 +121,10 @@ def test_a_relative_goal_is_the_same_turn_and_shift_from_every_start(path, axis)
                     np.subtract(target, nominal.position), abs=1e-12)
 
 
-@pytest.mark.parametrize('path,axes', [(TASKS / 'task5.yaml', 'x'),
+@pytest.mark.parametrize('path,axes', [(TASKS / 'task5.yaml', 'xy'),
+                                       (TASKS / 'task5_along_x.yaml', 'x'),
                                        (TASKS.parent / 'reproduce' / 'task5.yaml', 'xy')],
-                         ids=['task5', 'pinned-task5'])
+                         ids=['task5', 'task5-along-x', 'pinned-task5'])
 def test_the_plane_goals_ignore_the_resting_height_and_nothing_else(path, axes):
     """Task 5 scores a box at its goal zero at any scale; an offset on a scored axis counts."""
     task = turned_about(path, 'z')

@@ -12,6 +12,7 @@ import json
 import math
 import os
 import pathlib
+import re
 import signal
 import subprocess
 import sys
@@ -409,7 +410,8 @@ def test_analyze_reports_only_the_errors_of_the_tasks_goals():
 def test_bands_are_scored_on_the_error_the_tasks_goal_measures():
     def scored(folder, name):
         return campaign.scored_tolerance(load_task(ROOT / 'config' / folder / name)).kind
-    assert scored('tasks', 'task5.yaml') == 'x'  # the presets score along the fingers' axis
+    assert scored('tasks', 'task5.yaml') == 'plane'  # the paper's task: the plane of the table
+    assert scored('tasks', 'task5_along_x.yaml') == 'x'  # the named variant: x alone
     assert scored('reproduce', 'task5.yaml') == 'plane'
     assert scored('tasks', 'task6.yaml') == 'orientation'
 
@@ -454,3 +456,21 @@ def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsy
         assert share == (np.mean(within[inside]) if count else None)
     assert sum(count for _, _, count, _ in bands['quantities']['scale']) == 20
     assert '| scale |' in printed
+
+
+def test_every_preset_and_table_named_in_results_exists_and_checks():
+    # docs/RESULTS.md's figures stand on presets and committed tables: each one it names must
+    # be there, and each preset must load as a task (what `hand-codesign check` validates)
+    text = (ROOT / 'docs' / 'RESULTS.md').read_text(encoding='utf-8')
+    presets = set(re.findall(r'(?:config/(?:tasks|reproduce)/)?(\w+\.yaml)', text))
+    presets -= {'smaller.yaml', 'campaign.yaml'}
+    assert {'task5.yaml', 'task6.yaml', 'task5_along_x.yaml', 'task6_diagonal.yaml'} <= presets
+    for name in sorted(presets):
+        found = [folder / name for folder in (ROOT / 'config' / 'tasks',
+                                              ROOT / 'config' / 'reproduce')
+                 if (folder / name).exists()]
+        assert found, f'docs/RESULTS.md names {name}, which is in neither config folder'
+        for path in found:
+            load_task(path)
+    for table in set(re.findall(r'(?:docs/)?(results/[\w.-]+/[\w.-]+\.(?:md|csv|png))', text)):
+        assert (ROOT / 'docs' / table).exists(), f'docs/RESULTS.md names a missing {table}'

@@ -64,7 +64,11 @@ def test_table_one_values():
 
 def test_goal_axes_and_symmetry():
     task5 = load_task(TASK5)
-    assert task5.goals.position[0].axes == ('x',)  # the fingers' axis (issue 12)
+    assert task5.goals.position[0].axes == ('x', 'y')  # the paper's task: the plane (issue 26)
+    variant = load_task(ROOT / 'config' / 'tasks' / 'task5_along_x.yaml')
+    assert variant.goals.position[0].axes == ('x',)  # the named variant: the fingers' axis
+    assert variant.replace(goals=task5.goals, name=task5.name, source_text=task5.source_text,
+                           source=task5.source, description=task5.description) == task5
     pinned = load_task(ROOT / 'config' / 'reproduce' / 'task5.yaml')
     assert pinned.goals.position[0].axes == ('x', 'y')  # as the paper's experiments ran
     assert task5.goals.orientation_symmetry.axis == (0.0, 0.0, 1.0)
