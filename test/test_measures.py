@@ -116,7 +116,7 @@ class FinalJoints:
 
 
 def _reached(angle, link):
-    """The rule written out again: on a limit that the initial angle was not on."""
+    """Return the rule written out again: on a limit that the initial angle was not on."""
     lower, upper, start = link.lower_limit, link.upper_limit, link.initial_angle
     on_lower = angle <= lower + LIMIT_TOLERANCE and start > lower + LIMIT_TOLERANCE
     on_upper = angle >= upper - LIMIT_TOLERANCE and start < upper - LIMIT_TOLERANCE

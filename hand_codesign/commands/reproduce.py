@@ -1,13 +1,14 @@
 """
-`hand-codesign reproduce EXPERIMENT [--budget B] [--seeds S] [--evaluators E] [--out DIR]`
+`hand-codesign reproduce EXPERIMENT [--budget B] [--seeds S] [--evaluators E] [--out DIR]`.
 
 Runs one of the paper's experiments (core.experiments; `reproduce --list` names them) as a
 campaign: every configuration once per seed (`--seeds 3`: 1 to 3, the tuning seeds;
 `--seeds 101-105`: fresh seeds for headline figures; or a list `4,7`), each a normal
-`hand-codesign run` with its own bag under DIR/runs/, then measures every final design on worlds it never trained on
-(core.measures) and writes the experiment's tables (`.csv`, `.md`, a row per configuration)
-and figures into DIR (layout: hand_codesign.analysis.campaign). `--only` runs some of the
-experiment's configurations: a new lever beside a campaign that already measured the others.
+`hand-codesign run` with its own bag under DIR/runs/, then measures every final design on
+worlds it never trained on (core.measures) and writes the experiment's tables (`.csv`, `.md`,
+a row per configuration) and figures into DIR (layout: hand_codesign.analysis.campaign).
+`--only` runs some of the experiment's configurations: a new lever beside a campaign that
+already measured the others.
 
 Interrupted (Ctrl-C, SIGTERM, a reboot), the same command continues: finished runs are kept,
 the interrupted run is resumed from its bag (`hand-codesign run --resume`, into a new bag

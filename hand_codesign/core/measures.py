@@ -141,19 +141,12 @@ def measure_worlds(x, task, worlds, processes=1):
     """
     Return the WorldMeasures of a design on given worlds, each rollout run to its end.
 
-    Args:
-        x: the design's normalized genome, shape (genes,), values in [0, 1].
-        task: the Task it was found on; its early termination and horizon are dropped
-            (full_motion).
-        worlds: the WorldStates to measure on (at least one).
-        processes: worker processes (1: this one); the result does not depend on it.
-
-    Returns:
-        WorldMeasures: per world the final and initial errors of ERROR_KINDS (m or rad; pose
-        in units of its tolerances), start collisions and resting on a limit while touching.
-
-    Raises:
-        ValueError: no worlds.
+    x is the design's normalized genome, shape (genes,), values in [0, 1]; task the Task it
+    was found on, whose early termination and horizon are dropped (full_motion); worlds the
+    WorldStates to measure on; processes the worker processes (1: this one; the result does
+    not depend on it). The WorldMeasures hold per world the final and initial errors of
+    ERROR_KINDS (m or rad; the pose error in units of its tolerances), start collisions and
+    resting on a limit while touching. Raises ValueError without worlds.
     """
     worlds = tuple(worlds)
     if not worlds:
