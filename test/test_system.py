@@ -13,6 +13,7 @@ import json
 import os
 import pathlib
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -359,31 +360,52 @@ def test_nodes_started_by_hand_with_parameter_files(tmp_path):
         nodes_by_hand(tmp_path, dict(os.environ, ROS_DOMAIN_ID=str(domain_id)))
 
 
+def node_names(env):
+    """Return the names of the nodes the domain of env holds, as `ros2 node list` would."""
+    probe = ('import rclpy, time; rclpy.init(); node = rclpy.create_node("probe"); '
+             'time.sleep(2); print(" ".join(node.get_node_names()))')
+    return subprocess.run([sys.executable, '-c', probe], env=env, capture_output=True,
+                          text=True, check=True, timeout=60).stdout.split()
+
+
 def nodes_by_hand(tmp_path, env):
+    # started from a folder outside the repository, as `ros2 run` from a user's home: the
+    # optimizer's file names its task relative to the package (found in its share/)
     bin_folder = pathlib.Path(sys.prefix) / 'bin'
     config = ROOT / 'config'
 
-    def node(name, *parameters, **popen):
+    def node(name, *parameters, remaps=(), **popen):
         command = [str(bin_folder / name), '--ros-args', '--params-file',
                    str(config / f'{name}.yaml')]
         for parameter in parameters:
             command += ['-p', parameter]
-        return subprocess.Popen(command, cwd=ROOT, env=env, **popen)
+        for remap in remaps:
+            command += ['-r', remap]
+        return subprocess.Popen(command, cwd=tmp_path, env=env, **popen)
 
     bag = tmp_path / 'by-hand'
     recorder = node('recorder', f'bag_path:={bag}')
-    evaluator = node('evaluator', 'subscribers_expected:=2', stdout=subprocess.DEVNULL)
+    # two evaluators started alike (one given an id), each named after its id
+    evaluators = [node('evaluator', 'subscribers_expected:=2', stdout=subprocess.DEVNULL),
+                  node('evaluator', 'subscribers_expected:=2', 'evaluator_id:=lab-hand-2',
+                       stdout=subprocess.DEVNULL)]
+    # renamed: the `/**:` parameter file still gives it its task file
     optimizer = node('optimizer', 'iterations:=2', 'population:=4', 'world_states:=2',
-                     f'result_file:={tmp_path / "result.json"}', stderr=subprocess.PIPE,
-                     text=True)
+                     'evaluators_expected:=2', f'result_file:={tmp_path / "result.json"}',
+                     remaps=['__node:=my_optimizer'], stderr=subprocess.PIPE, text=True)
     try:
         _, log = optimizer.communicate(timeout=180)
         assert optimizer.returncode == 0, log
+        names = node_names(env)
     finally:
-        for process in (optimizer, evaluator, recorder):
+        for process in (optimizer, *evaluators, recorder):
             if process.poll() is None:
                 process.send_signal(signal.SIGINT)
             process.wait(timeout=60)
+    evaluator_names = {name for name in names if name not in ('probe', 'recorder')}
+    assert 'lab_hand_2' in evaluator_names and len(evaluator_names) == 2, names
+    assert f'{socket.gethostname()}_{evaluators[0].pid}'.replace('-', '_') in {
+        name.removeprefix('evaluator_') for name in evaluator_names}, names
     result = json.loads((tmp_path / 'result.json').read_text())
     assert result['task'] == 'task5' and result['evaluations'] == 8
     summaries_table = read_run(bag).generation_summaries
