@@ -33,6 +33,16 @@ VERBS = {
                   "run one of the paper's experiments and write its tables and figures"),
 }
 DEFAULT_PORT = 11811   # Fast DDS's own default for a discovery server
+MAX_DOMAIN_ID = 232    # the highest ROS_DOMAIN_ID ROS 2 accepts
+
+
+def domain_id_option(text):
+    """Return --domain-id's value: 'auto', or a ROS domain id (0 to 232)."""
+    if text == 'auto':
+        return text
+    if not text.isdigit() or int(text) > MAX_DOMAIN_ID:
+        raise argparse.ArgumentTypeError(f'expected "auto" or 0 to {MAX_DOMAIN_ID}, got {text!r}')
+    return int(text)
 
 
 def add_run_arguments(parser):
@@ -46,8 +56,9 @@ def add_run_arguments(parser):
     parser.add_argument('--popsize', type=int, help='candidates per generation')
     parser.add_argument('--world-states', type=int, help='randomized worlds per candidate')
     parser.add_argument('--resume', metavar='BAG', help='continue the run recorded in BAG')
-    parser.add_argument('--domain-id', type=int,
-                        help='ROS_DOMAIN_ID of the run (default: a free one of this host)')
+    parser.add_argument('--domain-id', type=domain_id_option, metavar='ID|auto',
+                        help="ROS_DOMAIN_ID of the run (default: the environment's, as ROS 2 "
+                             'tools; 0 if unset); auto: a free one of this host')
     parser.add_argument('--quiet', action='store_true', help='print only the final summary')
     parser.add_argument('--discovery-server', type=int, nargs='?', const=DEFAULT_PORT,
                         metavar='PORT',
@@ -144,8 +155,8 @@ def add_bag_arguments(verb, parser):
         parser.add_argument('--out', help='bag of the re-evaluation (default: <bag>_rig)')
         parser.add_argument('--timeout', type=float, default=3600.0,
                             help='seconds to wait for every answer (default 3600)')
-        parser.add_argument('--domain-id', type=int,
-                            help='ROS_DOMAIN_ID (default: a free one of this host)')
+        parser.add_argument('--domain-id', type=domain_id_option, metavar='ID|auto',
+                            help='ROS_DOMAIN_ID (default auto: a free one of this host)')
         add_rig_arguments(parser)
 
 

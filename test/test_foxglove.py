@@ -245,7 +245,7 @@ def test_a_busy_port_stops_the_live_view_with_one_line():
 def test_a_live_run_is_served_to_foxglove_as_its_bag_records_it(tmp_path):
     bag = tmp_path / 'live'
     command = CLI + ['run', '--task', str(TASK), '--evaluators', '1', '--bag', str(bag),
-                     *LIVE_BUDGET, '--live', '0']
+                     '--domain-id', 'auto', *LIVE_BUDGET, '--live', '0']
     process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True)
     lines = queue.Queue()

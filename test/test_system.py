@@ -43,9 +43,9 @@ def free_domain():
 
 
 def start_run(bag, evaluators, extra=(), budget=BUDGET, domain=None, task=TASK):
-    # without --domain-id the runner claims a free domain itself, also when other test
+    # `--domain-id auto`: the runner claims a free domain itself, also when other test
     # sessions run on this host at the same time
-    chosen = ['--domain-id', str(domain)] if domain is not None else []
+    chosen = ['--domain-id', str(domain) if domain is not None else 'auto']
     command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(task),
                '--evaluators', str(evaluators), '--bag', str(bag), *chosen, *budget, *extra]
     return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
@@ -421,3 +421,38 @@ def test_evaluator_keeps_its_heartbeat_while_it_evaluates(tmp_path):
     assert np.max(record.evaluations['wall_time']) > 1.5
     stamps = np.sort(record.evaluator_status['stamp']) * 1e-9
     assert np.max(np.diff(stamps)) < 1.0
+
+
+# what `ros2 topic echo /generation_summary` in the user's shell does: wait for a summary
+LISTENER = """
+import time
+import rclpy
+from hand_codesign.ros import topics
+rclpy.init()
+node = rclpy.create_node('shell_listener')
+heard = []
+name = topics.GENERATION_SUMMARY
+node.create_subscription(topics.MESSAGE_TYPES[name], name, heard.append, topics.QOS[name])
+end = time.monotonic() + 120
+while not heard and time.monotonic() < end:
+    rclpy.spin_once(node, timeout_sec=0.1)
+print(len(heard))
+"""
+
+
+def test_run_joins_the_ros_domain_of_the_users_shell(tmp_path):
+    for attempt in range(5):   # another run of this host may claim the free domain first
+        domain = free_domain()
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+        listener = subprocess.Popen([sys.executable, '-c', LISTENER], env=env,
+                                    stdout=subprocess.PIPE, text=True)
+        command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
+                   '--evaluators', '1', '--bag', str(tmp_path / str(attempt)), *BUDGET]
+        run = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True,
+                             timeout=300)
+        heard, _ = listener.communicate(timeout=150)
+        if 'in use by another run' not in run.stderr:
+            break
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert f"ROS_DOMAIN_ID={domain} (the environment's ROS_DOMAIN_ID)" in run.stdout
+    assert int(heard) >= 1

@@ -281,7 +281,8 @@ class Campaign:
         self.runs_dir.mkdir(parents=True, exist_ok=True)
         previous = campaign.attempts(self.runs_dir, key)
         bag = campaign.next_attempt(self.runs_dir, key)
-        common = ['--bag', str(bag), '--evaluators', str(evaluators), '--quiet']
+        common = ['--bag', str(bag), '--evaluators', str(evaluators), '--quiet',
+                  '--domain-id', 'auto']   # campaigns side by side never share a domain
         if previous:
             code = self.call(['--resume', str(previous[-1])] + common)
             if code != RESUME_REFUSED:

@@ -66,7 +66,8 @@ def claimed_domain(requested):
         finally:
             lock.close()
         return
-    raise UserError(f'ROS domain {requested} is in use by another run of this host'
+    raise UserError(f'ROS domain {requested} is in use by another run of this host: choose '
+                    'another with --domain-id ID, or a free one with --domain-id auto'
                     if requested is not None else 'no free ROS domain id on this host')
 
 
