@@ -10,6 +10,7 @@ import importlib
 import sys
 
 from hand_codesign.errors import UserError
+from hand_codesign.version import version_text
 
 # verb -> (module, function, one-line help); the function takes the parsed arguments.
 VERBS = {
@@ -160,10 +161,23 @@ def add_bag_arguments(verb, parser):
         add_rig_arguments(parser)
 
 
+class VersionAction(argparse.Action):
+    """--version: print the package version (and the commit of a checkout) and exit."""
+
+    def __init__(self, option_strings, dest, **keywords):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS,
+                         help='print the version (and the git commit of a checkout) and exit')
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f'hand-codesign {version_text()}')
+        parser.exit()
+
+
 def build_parser():
     parser = argparse.ArgumentParser(
         prog='hand-codesign',
         description='Co-design robot hands and their control by evolution strategies.')
+    parser.add_argument('--version', action=VersionAction)
     verbs = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
     for verb, (_, _, help_text) in VERBS.items():
         verb_parser = verbs.add_parser(verb, help=help_text, description=help_text)

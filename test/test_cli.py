@@ -1,5 +1,6 @@
 """The `hand-codesign` command: its verbs, and bad flags answered with one clear line."""
 
+import importlib.metadata
 import pathlib
 import subprocess
 import sys
@@ -105,3 +106,13 @@ def test_a_bad_domain_id_is_one_line(capsys, value):
         cli.main(['run', '--task', TASK, '--domain-id', value])
     err = capsys.readouterr().err
     assert stop.value.code == 2 and f'expected "auto" or 0 to 232, got {value!r}' in err
+
+
+def test_version_names_the_package_version():
+    output = subprocess.run([sys.executable, '-m', 'hand_codesign.cli', '--version'],
+                            capture_output=True, text=True, check=True).stdout
+    assert output.startswith(f'hand-codesign {importlib.metadata.version("hand_codesign")}')
+    if (ROOT / '.git').exists():   # a checkout: the commit too, as `git describe` gives it
+        commit = subprocess.run(['git', 'rev-parse', '--short=7', 'HEAD'], cwd=ROOT,
+                                capture_output=True, text=True, check=True).stdout.strip()
+        assert f'(commit {commit}' in output

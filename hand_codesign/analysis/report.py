@@ -33,6 +33,7 @@ from hand_codesign.analysis.rig_report import rig_comparison
 from hand_codesign.analysis.trust import trust_facts
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.errors import UserError
+from hand_codesign.version import version_text
 import numpy as np
 
 MAX_TABLE_ROWS = 12
@@ -511,6 +512,7 @@ class Report:
         """Return report.md."""
         lines = [f'# Run {self.record.run_id or "(unknown)"}', '', '| | |', '|---|---|']
         lines += [f'| {label} | {_markdown_cell(text)} |' for label, text in self.facts()]
+        lines.append(f'| report by | hand-codesign {version_text()} |')
         if self.record.warnings:
             lines += ['', '## Warnings from reading the bag', '']
             lines += [f'- {_markdown_cell(warning)}' for warning in self.record.warnings]

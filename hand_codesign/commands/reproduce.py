@@ -28,6 +28,7 @@ from hand_codesign.commands.run import termination_as_interrupt
 from hand_codesign.core import experiments, preview
 from hand_codesign.core.hierarchy import GROWN_FROM
 from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.summary import format_duration
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 import numpy as np
@@ -156,17 +157,6 @@ class Progress:
         if whole:
             self.done_runs.append((steps, seconds))
         self.pending.remove(steps)
-
-
-def format_duration(seconds):
-    """Return e.g. '1 h 05 min', '12 min' or '40 s'."""
-    seconds = int(round(seconds))
-    if seconds < 60:
-        return f'{seconds} s'
-    minutes = seconds // 60
-    if minutes < 60:
-        return f'{minutes} min'
-    return f'{minutes // 60} h {minutes % 60:02d} min'
 
 
 class Campaign:
