@@ -121,6 +121,8 @@ def add_reproduce_arguments(parser):
     parser.add_argument('--only', nargs='+', metavar='CONFIGURATION',
                         help="run only these of the experiment's configurations (the first "
                              'column of its table); the tables show every one measured')
+    parser.add_argument('--format', choices=('png', 'svg', 'pdf'), default='png',
+                        help='file format of the figures (default png)')
 
 
 def add_bag_arguments(verb, parser):

@@ -51,7 +51,8 @@ def reproduce_command(arguments):
     out = pathlib.Path(arguments.out or f'results/{arguments.experiment}-{arguments.budget}')
     campaigns = [Campaign(experiment, arguments.budget, arguments.seeds,
                           out if len(chosen) == 1 else out / experiment.name,
-                          chosen_configurations(experiment, arguments.only))
+                          chosen_configurations(experiment, arguments.only),
+                          figure_format=getattr(arguments, 'format', 'png'))
                  for experiment in chosen]
     for item in campaigns:
         item.prepare()
@@ -162,8 +163,10 @@ class Progress:
 class Campaign:
     """One experiment's campaign in its folder: its runs, measures and tables."""
 
-    def __init__(self, experiment, budget_name, seeds, out, configurations=None):
+    def __init__(self, experiment, budget_name, seeds, out, configurations=None,
+                 figure_format='png'):
         self.experiment = experiment
+        self.figure_format = figure_format   # of the figures: png, svg or pdf
         self.budget = experiment.budget(budget_name)
         self.seeds = seeds or self.budget.seeds
         self.out = pathlib.Path(out)
@@ -348,6 +351,7 @@ class Campaign:
 
     def write_results(self):
         """Write the experiment's tables and figures from its runs' measures."""
-        paths = campaign.write_results(self.out, self.experiment, self.budget, self.seeds)
+        paths = campaign.write_results(self.out, self.experiment, self.budget, self.seeds,
+                                       self.figure_format)
         print(f'reproduce: {self.experiment.name} ({self.budget.describe()}, {self.seeds} '
               f'seeds): {", ".join(str(path) for path in paths)}', flush=True)
