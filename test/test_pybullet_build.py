@@ -1,4 +1,4 @@
-"""The PyBullet that `make fast-physics` builds with profile-guided optimization: the wheel's results."""
+"""The PyBullet `make fast-physics` builds with profile-guided optimization: as the wheel."""
 
 import json
 import os

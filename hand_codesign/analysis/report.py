@@ -31,7 +31,6 @@ It prints a summary table to the terminal.
 import pathlib
 
 from hand_codesign.analysis import records
-from hand_codesign.analysis.design_picture import write_design_picture
 from hand_codesign.analysis.rig_report import rig_comparison
 from hand_codesign.analysis.trust import trust_facts
 from hand_codesign.core.genome import genome_spec
@@ -498,6 +497,8 @@ class Report:
             return []
         if len(self.best.x) != genome_spec(task).size:   # a bag of another task's genomes
             return []
+        # imported here: the picture simulates (PyBullet), the rest of the report does not
+        from hand_codesign.analysis.design_picture import write_design_picture
         self.picture = write_design_picture(path, task, self.best, world_states(task)[0],
                                             _pyplot())
         return [self.picture]
