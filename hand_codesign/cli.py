@@ -34,7 +34,7 @@ VERBS = {
                   "run one of the paper's experiments and write its tables and figures"),
 }
 DEFAULT_PORT = 11811   # Fast DDS's own default for a discovery server
-MAX_DOMAIN_ID = 232    # the highest ROS_DOMAIN_ID ROS 2 accepts
+MAX_DOMAIN_ID = 232    # ros.runner's; not imported from there, so that --help needs no ROS
 
 
 def domain_id_option(text):

@@ -24,6 +24,7 @@ from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 from hand_codesign.ros.discovery import DiscoveryServer
 from hand_codesign.ros.runner import claimed_domain
+from hand_codesign.ros.runner import MAX_DOMAIN_ID
 from hand_codesign.ros.runner import System
 
 OPTIMIZER_MODULE = 'hand_codesign.commands.optimizer'
@@ -93,9 +94,9 @@ def run_domain(option, environment=os.environ):
     text = environment.get('ROS_DOMAIN_ID', '').strip()
     if not text:
         return 0, "ROS_DOMAIN_ID is not set: ROS 2's default; --domain-id auto picks a free one"
-    if not text.isdigit() or int(text) > 232:
-        raise UserError(f'ROS_DOMAIN_ID={text!r} in the environment: expected 0 to 232 (or run '
-                        'with --domain-id ID or --domain-id auto)')
+    if not text.isdigit() or int(text) > MAX_DOMAIN_ID:
+        raise UserError(f'ROS_DOMAIN_ID={text!r} in the environment: expected 0 to '
+                        f'{MAX_DOMAIN_ID} (or run with --domain-id ID or --domain-id auto)')
     return int(text), "the environment's ROS_DOMAIN_ID"
 
 
