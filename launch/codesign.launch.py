@@ -4,13 +4,13 @@ A co-design run as ROS 2 users start one: `ros2 launch hand_codesign codesign.la
     ros2 launch hand_codesign codesign.launch.py task_file:=config/tasks/task5.yaml \
         evaluators:=2 bag:=bags/run1 seed:=1
 
-Starts the recorder (it writes the bag), `evaluators` evaluators (evaluator-1, evaluator-2, ...,
-each node named after its id: /evaluator_1, ...) and the optimizer, each with its parameter file
-from this package's share/config; when the optimizer ends, the launch stops the others and the
-recorder closes the bag. The processes are those of `hand-codesign run`, which adds what a
-launch file does not: restarting a dead evaluator or recorder, and a free ROS domain on request.
-This launch runs on the shell's ROS_DOMAIN_ID, so `ros2 topic echo /generation_summary` there
-follows the run.
+Starts the recorder (it writes the bag), `evaluators` evaluators (evaluator-0, evaluator-1, ...,
+as a run's own, each node named after its id: /evaluator_0, ...) and the optimizer, each with
+its parameter file from this package's share/config; when the optimizer ends, the launch stops
+the others and the recorder closes the bag. The processes are those of `hand-codesign run`,
+which adds what a launch file does not: restarting a dead evaluator or recorder, and a free ROS
+domain on request. This launch runs on the shell's ROS_DOMAIN_ID, so `ros2 topic echo
+/generation_summary` there follows the run.
 
 The launch arguments:
     task_file   task file (YAML); a relative path is looked for in the working folder, then in
@@ -55,12 +55,12 @@ def run_nodes(context):
     bag = given['bag'] or time.strftime('bags/launch-%Y%m%d-%H%M%S')
     recorder = Node(package=PACKAGE, executable='recorder', output='screen',
                     parameters=[parameter_file('recorder.yaml'), {'bag_path': bag}])
-    # no node name given: each evaluator takes the one of its id (/evaluator_1, ...)
+    # no node name given: each evaluator takes the one of its id (/evaluator_0, ...)
     pool = [Node(package=PACKAGE, executable='evaluator', output='screen',
                  parameters=[parameter_file('evaluator.yaml'), {
                      'evaluator_id': f'evaluator-{index}',
                      'subscribers_expected': 2}])  # the optimizer and the recorder
-            for index in range(1, evaluators + 1)]
+            for index in range(evaluators)]
     optimizer = Node(package=PACKAGE, executable='optimizer', output='screen',
                      parameters=[parameter_file('optimizer.yaml'), {
                          'task_file': given['task_file'],

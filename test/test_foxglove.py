@@ -222,7 +222,7 @@ def test_per_evaluator_plots_draw_one_line_per_evaluator():
               for path in series]
     assert all(chosen), series
     assert {match.group(1) for match in chosen} == set(variables)
-    assert sorted(variables.values()) == ['evaluator-1', 'evaluator-2']   # a run's own ids
+    assert sorted(variables.values()) == ['evaluator-0', 'evaluator-1']   # a run's own ids
     for config in layout['configById'].values():
         fields = {}
         for path in config.get('paths', []):
