@@ -360,10 +360,13 @@ def test_nodes_started_by_hand_with_parameter_files(tmp_path):
         nodes_by_hand(tmp_path, dict(os.environ, ROS_DOMAIN_ID=str(domain_id)))
 
 
-def node_names(env):
-    """Return the names of the nodes the domain of env holds, as `ros2 node list` would."""
+def node_names(env, expected):
+    """Return the node names the domain of env holds (`ros2 node list`), once `expected` are."""
     probe = ('import rclpy, time; rclpy.init(); node = rclpy.create_node("probe"); '
-             'time.sleep(2); print(" ".join(node.get_node_names()))')
+             'end = time.monotonic() + 30\n'
+             f'while len(node.get_node_names()) < {expected} and time.monotonic() < end: '
+             'time.sleep(0.1)\n'
+             'print(" ".join(node.get_node_names()))')
     return subprocess.run([sys.executable, '-c', probe], env=env, capture_output=True,
                           text=True, check=True, timeout=60).stdout.split()
 
@@ -396,7 +399,7 @@ def nodes_by_hand(tmp_path, env):
     try:
         _, log = optimizer.communicate(timeout=180)
         assert optimizer.returncode == 0, log
-        names = node_names(env)
+        names = node_names(env, expected=4)   # the probe, the recorder, the evaluators
     finally:
         for process in (optimizer, *evaluators, recorder):
             if process.poll() is None:
