@@ -14,6 +14,7 @@ from hand_codesign.cli import main
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.runs import run_task
 from hand_codesign.ros import topics
+from hand_codesign.version import version_text
 from mcap.writer import Writer
 import numpy as np
 import pytest
@@ -38,6 +39,8 @@ def test_analyze_writes_every_file(real_run, report):
     assert not (report / 'pareto.png').exists()   # a CMA-ES run has no Pareto front
     text = (report / 'report.md').read_text()
     result = real_run.result
+    # the version (and commit) of what wrote the report, as `hand-codesign --version` says
+    assert f'| report by | hand-codesign {version_text()} |' in text
     for fact in ('task5', '| seed | 3 |', '4 generations x 6 candidates x 2 world states',
                  'evaluations per second', '![convergence.png](convergence.png)',
                  f'Candidate {result["best_candidate_id"]} of generation {result["generation"]}'):
