@@ -53,6 +53,8 @@ def run(tree, module_paths, arguments, bag):
                '--evaluators', '2', '--bag', str(bag), '--quiet', '--seed', '1',
                '--iterations', str(arguments.iterations), '--popsize', str(arguments.popsize),
                '--world-states', str(arguments.world_states)]
+    if tree == ROOT:  # a free domain; the reference's `run` picked one without being asked
+        command += ['--domain-id', 'auto']
     environment = dict(os.environ, PYTHONPATH=os.pathsep.join(map(str, module_paths)))
     subprocess.run(command, cwd=tree, env=environment, check=True, stdout=subprocess.DEVNULL)
     return stepping_rate(read_run(bag))

@@ -9,7 +9,7 @@ Measures, in one run:
   bench_core's bare loop (stepping and torques only, Table I's settings), in interleaved
   rounds, best of 3; and against the same bare loop on the PyPI wheel's PyBullet, in a process
   of its own (bench_pybullet_build's worker): the issue's "today's bare loop", from before
-  `make setup` built PyBullet itself (target >= 1.6: the cheaper physics on top of the build);
+  `make fast-physics` built PyBullet (target >= 1.6: the cheaper physics on top of the build);
 - ranking: Spearman's rank correlation of the designs' fitness under both settings (target
   >= 0.98);
 - robustness: the best designs on a grid of world states (`grid_world_states`, 3 values per

@@ -114,7 +114,7 @@ def main():
     wheel = build_pybullet.wheel_copy()
     if not wheel.exists():
         print(f'no wheel copy at {wheel}: the installed PyBullet is the wheel '
-              '(tools/build_pybullet.py did not replace it); nothing to compare')
+              '(run `make fast-physics` first); nothing to compare')
         return
     sys.path.insert(0, str(ROOT / 'bench'))
     with tempfile.TemporaryDirectory() as folder:

@@ -82,7 +82,8 @@ def system_rate(evaluators, arguments, folder):
     command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK_FILE),
                '--evaluators', str(evaluators), '--bag', str(bag), '--quiet',
                '--iterations', str(arguments.iterations), '--popsize', str(arguments.popsize),
-               '--world-states', str(arguments.world_states), '--seed', '1']
+               '--world-states', str(arguments.world_states), '--seed', '1',
+               '--domain-id', 'auto']
     if arguments.audit_fraction is not None:
         command += ['--audit-fraction', str(arguments.audit_fraction)]
     subprocess.run(command, check=True, cwd=ROOT, stdout=subprocess.DEVNULL,

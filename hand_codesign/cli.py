@@ -10,6 +10,7 @@ import importlib
 import sys
 
 from hand_codesign.errors import UserError
+from hand_codesign.version import version_text
 
 # verb -> (module, function, one-line help); the function takes the parsed arguments.
 VERBS = {
@@ -33,6 +34,16 @@ VERBS = {
                   "run one of the paper's experiments and write its tables and figures"),
 }
 DEFAULT_PORT = 11811   # Fast DDS's own default for a discovery server
+MAX_DOMAIN_ID = 232    # ros.runner's; not imported from there, so that --help needs no ROS
+
+
+def domain_id_option(text):
+    """Return --domain-id's value: 'auto', or a ROS domain id (0 to 232)."""
+    if text == 'auto':
+        return text
+    if not text.isdigit() or int(text) > MAX_DOMAIN_ID:
+        raise argparse.ArgumentTypeError(f'expected "auto" or 0 to {MAX_DOMAIN_ID}, got {text!r}')
+    return int(text)
 
 
 def add_run_arguments(parser):
@@ -46,8 +57,9 @@ def add_run_arguments(parser):
     parser.add_argument('--popsize', type=int, help='candidates per generation')
     parser.add_argument('--world-states', type=int, help='randomized worlds per candidate')
     parser.add_argument('--resume', metavar='BAG', help='continue the run recorded in BAG')
-    parser.add_argument('--domain-id', type=int,
-                        help='ROS_DOMAIN_ID of the run (default: a free one of this host)')
+    parser.add_argument('--domain-id', type=domain_id_option, metavar='ID|auto',
+                        help="ROS_DOMAIN_ID of the run (default: the environment's, as ROS 2 "
+                             'tools; 0 if unset); auto: a free one of this host')
     parser.add_argument('--quiet', action='store_true', help='print only the final summary')
     parser.add_argument('--discovery-server', type=int, nargs='?', const=DEFAULT_PORT,
                         metavar='PORT',
@@ -110,6 +122,8 @@ def add_reproduce_arguments(parser):
     parser.add_argument('--only', nargs='+', metavar='CONFIGURATION',
                         help="run only these of the experiment's configurations (the first "
                              'column of its table); the tables show every one measured')
+    parser.add_argument('--format', choices=('png', 'svg', 'pdf'), default='png',
+                        help='file format of the figures (default png)')
 
 
 def add_bag_arguments(verb, parser):
@@ -145,15 +159,28 @@ def add_bag_arguments(verb, parser):
         parser.add_argument('--out', help='bag of the re-evaluation (default: <bag>_rig)')
         parser.add_argument('--timeout', type=float, default=3600.0,
                             help='seconds to wait for every answer (default 3600)')
-        parser.add_argument('--domain-id', type=int,
-                            help='ROS_DOMAIN_ID (default: a free one of this host)')
+        parser.add_argument('--domain-id', type=domain_id_option, metavar='ID|auto',
+                            help='ROS_DOMAIN_ID (default auto: a free one of this host)')
         add_rig_arguments(parser)
+
+
+class VersionAction(argparse.Action):
+    """--version: print the package version (and the commit of a checkout) and exit."""
+
+    def __init__(self, option_strings, dest, **keywords):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS,
+                         help='print the version (and the git commit of a checkout) and exit')
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f'hand-codesign {version_text()}')
+        parser.exit()
 
 
 def build_parser():
     parser = argparse.ArgumentParser(
         prog='hand-codesign',
         description='Co-design robot hands and their control by evolution strategies.')
+    parser.add_argument('--version', action=VersionAction)
     verbs = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
     for verb, (_, _, help_text) in VERBS.items():
         verb_parser = verbs.add_parser(verb, help=help_text, description=help_text)

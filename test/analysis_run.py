@@ -40,7 +40,7 @@ class RealRun:
 def run_codesign(bag, budget=BUDGET, extra=(), timeout=300, task=TASK):
     """Run `hand-codesign run` to completion; return its output (assert it succeeded)."""
     command = CLI + ['run', '--task', str(task), '--evaluators', '2', '--bag', str(bag),
-                     *budget, *extra]
+                     '--domain-id', 'auto', *budget, *extra]
     process = subprocess.run(command, cwd=ROOT, stdout=subprocess.PIPE,
                              stderr=subprocess.STDOUT, text=True, timeout=timeout)
     assert process.returncode == 0, process.stdout

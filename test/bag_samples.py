@@ -19,8 +19,10 @@ from hand_codesign_msgs.msg import GenerationSummary
 from hand_codesign_msgs.msg import RunInfo
 from hand_codesign_msgs.msg import TrialRequest
 from hand_codesign_msgs.msg import TrialStatus
+from mcap.reader import make_reader
 import numpy as np
 from rclpy.serialization import serialize_message
+import yaml
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK_YAML = (ROOT / 'config' / 'tasks' / 'task5.yaml').read_text() + '# ünïcödé comment\n'
@@ -202,3 +204,12 @@ class Process:
             self.popen.kill()
             self.popen.wait(timeout=10)
         self._reader.join(timeout=2.0)
+
+
+def rosbag2_record(path):
+    """Return the BagMetadata of an MCAP file's "rosbag2" record, read as rosbag2 reads it."""
+    with open(path, 'rb') as stream:
+        records = [record for record in make_reader(stream).iter_metadata()
+                   if record.name == 'rosbag2']
+    assert len(records) == 1, f'{path}: {len(records)} rosbag2 metadata records'
+    return yaml.safe_load(records[0].metadata['serialized_metadata'])

@@ -13,6 +13,7 @@ import types
 
 from bag_samples import dds_bytes
 from bag_samples import interleaved
+from bag_samples import rosbag2_record
 from bag_samples import sample_messages
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.cli import main
@@ -88,6 +89,12 @@ def test_recover_closes_a_killed_bag_for_independent_readers(tmp_path):
     assert summary.statistics.message_count == flushed and summary.chunk_indexes
     record = read_run(folder)
     assert not record.truncated and sum(record.message_counts.values()) == flushed
+    # the recovered file holds the rosbag2 record its recorder would have written on close
+    metadata = rosbag2_record(folder / 'run_0.mcap')
+    assert metadata['message_count'] == flushed and metadata['relative_file_paths'] == [
+        'run_0.mcap']
+    assert sum(entry['message_count'] for entry in metadata['topics_with_message_count']) == (
+        flushed)
     again = recover(folder)
     assert again.returncode == 0 and 'already closed' in again.stdout
 
@@ -119,6 +126,9 @@ def test_continued_bag_holds_each_message_once(tmp_path):
     assert information['message_count'] == total
     with Reader(folder) as reader:
         assert sum(1 for _ in reader.messages()) == total
+    # each file, the recovered one and the one continued, holds its own rosbag2 record
+    assert [rosbag2_record(folder / name)['message_count']
+            for name in ('run_0.mcap', 'run_1.mcap')] == [flushed, total - flushed]
     record = read_run(folder)
     assert {topic.lstrip('/'): count for topic, count in record.message_counts.items()} == {
         topic: len(x) for topic, x in messages.items()}

@@ -181,7 +181,8 @@ def test_a_file_that_is_not_utf8_is_one_line(tmp_path):
     line = one_line_error(run_command('check', str(path), '--json'), path)
     assert 'expected a task file in UTF-8 text, got byte 0xe9' in line
     bag = tmp_path / 'bag'
-    assert 'UTF-8' in one_line_error(run_command('run', '--task', str(path), '--bag', str(bag)),
+    assert 'UTF-8' in one_line_error(run_command('run', '--task', str(path), '--bag', str(bag),
+                                                 '--domain-id', 'auto'),
                                      path)
     assert not bag.exists()
 

@@ -1,10 +1,13 @@
 """The `hand-codesign` command: its verbs, and bad flags answered with one clear line."""
 
+import importlib.metadata
 import pathlib
 import subprocess
 import sys
 
 from hand_codesign import cli
+from hand_codesign.commands.run import run_domain
+from hand_codesign.errors import UserError
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -13,6 +16,8 @@ TASK = str(ROOT / 'config' / 'tasks' / 'task5.yaml')
 
 def run(capsys, *argv):
     """Return (exit code, stdout, stderr) of the CLI called in this process."""
+    # a run of a test takes a free ROS domain, never the shell's
+    argv = [*argv, '--domain-id', 'auto'] if argv[:1] == ('run',) else argv
     code = cli.main([str(argument) for argument in argv])
     output = capsys.readouterr()
     return code, output.out, output.err
@@ -84,3 +89,30 @@ def test_key_files_go_outside_the_bag_and_never_over_another_file(capsys, tmp_pa
     code, _, err = run(capsys, 'run', '--task', TASK, '--bag', bag, '--audit-fraction', '2')
     assert code == 2 and '--audit-fraction: expected a share from 0 to 1, got 2.0' in err
     assert not bag.exists()
+
+
+def test_run_takes_the_shells_ros_domain_unless_told_otherwise():
+    assert run_domain(None, {'ROS_DOMAIN_ID': '17'}) == (17, "the environment's ROS_DOMAIN_ID")
+    assert run_domain(None, {})[0] == 0    # ROS 2's default when the variable is unset
+    assert run_domain('auto', {'ROS_DOMAIN_ID': '17'})[0] is None    # a free one
+    assert run_domain(5, {'ROS_DOMAIN_ID': '17'})[0] == 5
+    with pytest.raises(UserError, match="ROS_DOMAIN_ID='x1' in the environment: expected 0 to"):
+        run_domain(None, {'ROS_DOMAIN_ID': 'x1'})
+
+
+@pytest.mark.parametrize('value', ['free', '233', '-1'])
+def test_a_bad_domain_id_is_one_line(capsys, value):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(['run', '--task', TASK, '--domain-id', value])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and f'expected "auto" or 0 to 232, got {value!r}' in err
+
+
+def test_version_names_the_package_version():
+    output = subprocess.run([sys.executable, '-m', 'hand_codesign.cli', '--version'],
+                            capture_output=True, text=True, check=True).stdout
+    assert output.startswith(f'hand-codesign {importlib.metadata.version("hand_codesign")}')
+    if (ROOT / '.git').exists():   # a checkout: the commit too, as `git describe` gives it
+        commit = subprocess.run(['git', 'rev-parse', '--short=7', 'HEAD'], cwd=ROOT,
+                                capture_output=True, text=True, check=True).stdout.strip()
+        assert f'(commit {commit}' in output

@@ -105,3 +105,26 @@ def test_installed_executable_runs(workspace):
                             capture_output=True, text=True, timeout=120, cwd='/')
     assert result.returncode == 0, result.stderr
     assert 'analyze' in result.stdout and 'run' in result.stdout
+
+
+def test_the_launch_file_and_what_it_names_are_installed(workspace):
+    share = workspace / 'hand_codesign' / 'share' / 'hand_codesign'
+    assert (share / 'launch' / 'codesign.launch.py').is_file()
+    for name in ('recorder', 'evaluator', 'optimizer'):   # what test_launch.py finds in it
+        assert (share / 'config' / f'{name}.yaml').is_file()
+
+
+def test_a_relative_task_file_is_found_in_the_installed_share(workspace):
+    # the optimizer's parameter file names config/tasks/task5.yaml; `ros2 launch` runs from
+    # any folder (here /), where the installed share/ holds it
+    share = workspace / 'hand_codesign' / 'share' / 'hand_codesign'
+    found = ask(workspace, 'from hand_codesign.ros.package_files import package_file; '
+                           'print(package_file("config/tasks/task5.yaml", "task_file"))')
+    assert found == str(share / 'config' / 'tasks' / 'task5.yaml')
+    optimizer = workspace / 'hand_codesign' / 'lib' / 'hand_codesign' / 'optimizer'
+    result = subprocess.run([str(optimizer), '--ros-args', '-p', 'task_file:=tasks/nope.yaml'],
+                            env=dict(installed_environment(workspace), ROS_DOMAIN_ID='151'),
+                            capture_output=True, text=True, timeout=120, cwd='/')
+    assert result.returncode == 2
+    assert ('parameter task_file tasks/nope.yaml: no such file in the working folder / nor in '
+            f'the package share/ {share}') in result.stderr

@@ -6,7 +6,7 @@ from ament_flake8.main import main_with_errors
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-CHECKED = ['hand_codesign', 'test', 'bench', 'tools', 'setup.py']
+CHECKED = ['hand_codesign', 'test', 'bench', 'tools', 'launch', 'setup.py']
 
 
 @pytest.mark.flake8

@@ -157,7 +157,7 @@ def layout_references(layout):
         if 'xAxisPath' in config:
             paths.append(config['xAxisPath']['value'])
         for path in paths:
-            match = re.fullmatch(r'(/[\w/]+)(\{(\w+)==\w+\})?\.(\w+)(\[\d+\])?', path)
+            match = re.fullmatch(r'(/[\w/]+)(\{(\w+)==\$?\w+\})?\.(\w+)(\[\d+\])?', path)
             assert match, f'{panel}: message path {path!r} not understood'
             references.append((match.group(1), match.group(4)))
             if match.group(3):
@@ -187,6 +187,48 @@ def test_the_layout_names_only_topics_and_fields_that_exist():
         if field:
             assert field in classes[topic.lstrip('/')].get_fields_and_field_types(), \
                 f'{topic} has no field {field}'
+
+
+# the keys Foxglove's classic layout file holds, and those of a Plot panel and its series
+LAYOUT_KEYS = {'configById', 'globalVariables', 'userNodes', 'playbackConfig', 'layout'}
+PANEL_TITLE = 'foxglovePanelTitle'   # where the app keeps a panel's title (not "title")
+PLOT_KEYS = {PANEL_TITLE, 'paths', 'xAxisVal', 'xAxisPath', 'showLegend', 'legendDisplay',
+             'showXAxisLabels', 'showYAxisLabels', 'isSynced', 'minYValue', 'maxYValue',
+             'showPlotValuesInLegend', 'sidebarDimension'}
+SERIES_KEYS = {'value', 'enabled', 'timestampMethod', 'label', 'color', 'showLine', 'lineSize'}
+
+
+def test_the_layout_uses_the_keys_foxglove_reads():
+    layout = json.loads(LAYOUT.read_text())
+    assert set(layout) == LAYOUT_KEYS
+    for panel, config in layout['configById'].items():
+        assert 'title' not in config and config.get(PANEL_TITLE), f'{panel}: no panel title'
+        if panel.startswith('Plot!'):
+            assert set(config) <= PLOT_KEYS, (panel, set(config) - PLOT_KEYS)
+            for series in config['paths']:
+                assert set(series) <= SERIES_KEYS, (panel, set(series) - SERIES_KEYS)
+
+
+def test_per_evaluator_plots_draw_one_line_per_evaluator():
+    # one series for all evaluators zig-zags between them; a filter on the evaluator id, its
+    # value a layout variable, keeps each evaluator's line apart
+    layout = json.loads(LAYOUT.read_text())
+    variables = layout['globalVariables']
+    status = '/' + contract.EVALUATOR_STATUS
+    series = [path['value'] for config in layout['configById'].values()
+              for path in config.get('paths', []) if path['value'].startswith(status)]
+    assert series
+    chosen = [re.fullmatch(re.escape(status) + r'\{evaluator_id==\$(\w+)\}\.\w+', path)
+              for path in series]
+    assert all(chosen), series
+    assert {match.group(1) for match in chosen} == set(variables)
+    assert sorted(variables.values()) == ['evaluator-0', 'evaluator-1']   # a run's own ids
+    for config in layout['configById'].values():
+        fields = {}
+        for path in config.get('paths', []):
+            if path['value'].startswith(status):
+                fields.setdefault(path['value'].rsplit('.', 1)[1], set()).add(path['value'])
+        assert all(len(paths) == len(variables) for paths in fields.values()), fields
 
 
 # ------------------------------------------------------------------ live
@@ -245,7 +287,7 @@ def test_a_busy_port_stops_the_live_view_with_one_line():
 def test_a_live_run_is_served_to_foxglove_as_its_bag_records_it(tmp_path):
     bag = tmp_path / 'live'
     command = CLI + ['run', '--task', str(TASK), '--evaluators', '1', '--bag', str(bag),
-                     *LIVE_BUDGET, '--live', '0']
+                     '--domain-id', 'auto', *LIVE_BUDGET, '--live', '0']
     process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True)
     lines = queue.Queue()

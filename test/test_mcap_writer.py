@@ -4,6 +4,7 @@ import pathlib
 
 from ament_index_python.packages import get_package_share_directory
 from bag_samples import interleaved
+from bag_samples import rosbag2_record
 from bag_samples import sample_messages
 from bag_samples import write_bag
 from hand_codesign.ros import topics
@@ -110,6 +111,38 @@ def test_bag_file_reads_back_with_mcap_ros2_support_and_rosbags(tmp_path):
     for (topic, message), (expected_topic, original) in zip(read, expected):
         assert topic == '/' + expected_topic
         assert_same_message(message, original)
+
+
+def test_a_bare_file_holds_the_rosbag2_metadata_record_ros2_bag_info_reads(tmp_path):
+    messages = sample_messages()
+    path = tmp_path / 'run.mcap'
+    write_bag(path, messages)
+    metadata = rosbag2_record(path)
+    with open(path, 'rb') as stream:
+        summary = make_reader(stream).get_summary()
+    statistics = summary.statistics
+    assert metadata['version'] == 9 and metadata['ros_distro'] == 'jazzy'
+    assert metadata['storage_identifier'] == 'mcap' and metadata['compression_mode'] == ''
+    assert metadata['relative_file_paths'] == ['run.mcap']
+    assert metadata['message_count'] == statistics.message_count
+    assert metadata['starting_time'] == {'nanoseconds_since_epoch': statistics.message_start_time}
+    assert metadata['duration'] == {
+        'nanoseconds': statistics.message_end_time - statistics.message_start_time}
+    assert metadata['files'] == [{
+        'path': 'run.mcap', 'starting_time': metadata['starting_time'],
+        'duration': metadata['duration'], 'message_count': statistics.message_count}]
+    channels = {channel.topic: channel for channel in summary.channels.values()}
+    assert len(metadata['topics_with_message_count']) == len(channels)
+    for entry in metadata['topics_with_message_count']:
+        topic = entry['topic_metadata']
+        channel = channels[topic['name']]
+        assert entry['message_count'] == statistics.channel_message_counts[channel.id]
+        assert topic['type'] == summary.schemas[channel.schema_id].name
+        assert topic['serialization_format'] == 'cdr'
+        # version 9: the QoS profiles as a YAML list, the same as the channel's own
+        assert topic['offered_qos_profiles'] == yaml.safe_load(
+            channel.metadata['offered_qos_profiles'])
+        assert topic['type_description_hash'] == channel.metadata['topic_type_hash']
 
 
 def test_bag_directory_has_rosbag2_metadata_and_reads_with_rosbags(tmp_path):

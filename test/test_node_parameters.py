@@ -26,7 +26,8 @@ def start_node(module, *parameters):
     ('hand_codesign.commands.optimizer', ['heartbeat_timeout:=0.0', f'task_file:={TASK}'],
      'Parameter heartbeat_timeout out of range'),
     ('hand_codesign.commands.optimizer', ['task_file:=no/such/task.yaml'],
-     'no/such/task.yaml: cannot read the task file'),
+     f'parameter task_file no/such/task.yaml: no such file in the working folder {ROOT} nor in '
+     f'the package share/ {ROOT}'),
     ('hand_codesign.ros.optimizer_node', ['resume_bag:=some-bag'],
      'parameter resume_bag: this entry point cannot read bags; start `python -m '
      'hand_codesign.commands.optimizer`'),

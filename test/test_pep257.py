@@ -6,7 +6,7 @@ from ament_pep257.main import main
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-CHECKED = ['hand_codesign', 'test', 'bench', 'tools']
+CHECKED = ['hand_codesign', 'test', 'bench', 'tools', 'launch']
 
 
 @pytest.mark.linter

@@ -287,7 +287,8 @@ BAD_ARCHIVES = [
 def test_a_bad_archive_key_is_one_line_naming_file_and_key(algorithm, archive, expected,
                                                            tmp_path, capsys):
     path = write_task(tmp_path, task_document(algorithm, archive), 'wrong.yaml')
-    assert main(['run', '--task', str(path), '--bag', str(tmp_path / 'bag')]) == 2
+    assert main(['run', '--task', str(path), '--bag', str(tmp_path / 'bag'),
+                 '--domain-id', 'auto']) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and 'Traceback' not in err
     assert f'{path}: {expected}' in err
@@ -355,7 +356,8 @@ def resume_interrupted_copy(bag, folder):
     mcap, = sorted(bag.glob('*.mcap'))
     interrupted = copy_bag(mcap, folder / 'interrupted.mcap', keep=until_evaluation_of(18))
     resumed = folder / 'resumed'
-    finished = run_cli('run', '--resume', interrupted, '--evaluators', '2', '--bag', resumed)
+    finished = run_cli('run', '--resume', interrupted, '--evaluators', '2', '--bag', resumed,
+                       '--domain-id', 'auto')
     assert finished.returncode == 0, finished.stdout + finished.stderr
     result = json.loads((resumed / 'result.json').read_text())
     expected = json.loads((bag / 'result.json').read_text())

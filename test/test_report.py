@@ -14,6 +14,7 @@ from hand_codesign.cli import main
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.runs import run_task
 from hand_codesign.ros import topics
+from hand_codesign.version import version_text
 from mcap.writer import Writer
 import numpy as np
 import pytest
@@ -38,6 +39,8 @@ def test_analyze_writes_every_file(real_run, report):
     assert not (report / 'pareto.png').exists()   # a CMA-ES run has no Pareto front
     text = (report / 'report.md').read_text()
     result = real_run.result
+    # the version (and commit) of what wrote the report, as `hand-codesign --version` says
+    assert f'| report by | hand-codesign {version_text()} |' in text
     for fact in ('task5', '| seed | 3 |', '4 generations x 6 candidates x 2 world states',
                  'evaluations per second', '![convergence.png](convergence.png)',
                  f'Candidate {result["best_candidate_id"]} of generation {result["generation"]}'):
@@ -45,6 +48,31 @@ def test_analyze_writes_every_file(real_run, report):
     # the best design's parameters in physical units, as the optimizer reported them
     for name, value in result['design'].items():
         assert f'| {name} | {value:.6g} |' in text, name
+
+
+def test_report_shows_the_best_design_at_the_start_and_end_of_world_0(report):
+    import imageio.v3 as imageio
+    text = (report / 'report.md').read_text()
+    assert '](best_design.png)' in text.split('## Best design')[1]
+    image = imageio.imread(report / 'best_design.png')[..., :3].astype(int)
+    start, end = np.array_split(image, 2, axis=1)
+    assert start.std() > 10 and end.std() > 10    # something is drawn in both panels
+
+
+def test_design_picture_places_each_shape_at_its_pose():
+    from hand_codesign.analysis.design_picture import shape_surfaces
+    from hand_codesign.core.geometry import Shape
+    from hand_codesign.core.rotations import axis_angle_quaternion
+    # a 4 x 2 x 1 cm box turned 90 degrees about z: 2 cm along x, 4 cm along y
+    box = Shape('box', 'object', (0.1, 0.2, 0.3), axis_angle_quaternion((0, 0, 1), np.pi / 2),
+                (0.04, 0.02, 0.01), (0, 0, 1, 1))
+    points = np.concatenate([grid.reshape(3, -1).T for grid in shape_surfaces(box)])
+    assert np.allclose(points.min(axis=0), [0.09, 0.18, 0.295])
+    assert np.allclose(points.max(axis=0), [0.11, 0.22, 0.305])
+    sphere = Shape('sphere', 'segments', (0.0, 0.0, 0.1), (0, 0, 0, 1), (0.02,) * 3,
+                   (1, 0, 0, 1))
+    points = shape_surfaces(sphere)[0].reshape(3, -1).T
+    assert np.allclose(np.linalg.norm(points - [0.0, 0.0, 0.1], axis=1), 0.01)
 
 
 def test_csv_rows_are_the_bag_evaluations_bit_for_bit(real_run, report):

@@ -136,7 +136,7 @@ def test_resume_and_replay_rebuild_the_resampled_run_and_its_check(task_file):
 def real_run(bag, evaluators, task_file):
     command = CLI + ['run', '--task', str(task_file), '--evaluators', str(evaluators),
                      '--bag', str(bag), '--iterations', '3', '--popsize', '4',
-                     '--world-states', '2', '--seed', '4']
+                     '--world-states', '2', '--seed', '4', '--domain-id', 'auto']
     process = subprocess.run(command, cwd=ROOT, stdout=subprocess.PIPE,
                              stderr=subprocess.STDOUT, text=True, timeout=300)
     assert process.returncode == 0, process.stdout
@@ -226,7 +226,8 @@ def test_a_resampled_run_resumed_in_its_final_check_reports_the_same_design(runs
     point = resume_point(interrupted)
     assert point.search.checking and len(point.known) == 1 and len(point.to_evaluate) == 1
     resumed = tmp_path / 'resumed'
-    finished = run_cli('run', '--resume', interrupted, '--evaluators', '2', '--bag', resumed)
+    finished = run_cli('run', '--resume', interrupted, '--evaluators', '2', '--bag', resumed,
+                       '--domain-id', 'auto')
     assert finished.returncode == 0, finished.stdout + finished.stderr
     result = json.loads((resumed / 'result.json').read_text())
     expected = json.loads((bag / 'result.json').read_text())

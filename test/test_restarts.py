@@ -219,7 +219,8 @@ def test_tasks_select_the_restart_algorithms(tmp_path):
 
 def test_a_wrong_algorithm_is_one_line_naming_file_and_key(tmp_path, capsys):
     path = write_task(tmp_path, task_document('ipop', None), 'wrong.yaml')
-    assert main(['run', '--task', str(path), '--bag', str(tmp_path / 'bag')]) == 2
+    assert main(['run', '--task', str(path), '--bag', str(tmp_path / 'bag'),
+                 '--domain-id', 'auto']) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and 'Traceback' not in err
     expected = 'expected one of cma, mocma, ipop-cma, bipop-cma, cma-mae, cma-me, got '

@@ -101,7 +101,8 @@ def test_run_resume_after_interrupting_a_run(real_run, tmp_path):
     # a tenth of a second, so the run sometimes finished before the signal arrived.)
     bag, _ = interrupted_copy(real_run, tmp_path / 'interrupted.mcap')
     resumed = tmp_path / 'resumed'
-    finished = run_cli('run', '--resume', bag, '--evaluators', '2', '--bag', resumed)
+    finished = run_cli('run', '--resume', bag, '--evaluators', '2', '--bag', resumed,
+                       '--domain-id', 'auto')
     assert finished.returncode == 0, finished.stdout + finished.stderr
     result = json.loads((resumed / 'result.json').read_text())
     for key in ('best_candidate_id', 'fitness', 'objectives', 'design'):

@@ -38,7 +38,7 @@ def command(*arguments, timeout=300):
 def rig_run(tmp_path_factory):
     bag = tmp_path_factory.mktemp('rig') / 'run'
     code, output = command('run', '--task', TASK, '--evaluators', 0, '--rig', 'sim',
-                           '--bag', bag, *BUDGET)
+                           '--bag', bag, '--domain-id', 'auto', *BUDGET)
     assert code == 0, output
     return bag
 

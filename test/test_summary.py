@@ -41,3 +41,6 @@ def test_the_progress_line_says_where_the_run_is():
     line = progress_line(summary, 10, 3.2, 41.6)
     assert line.startswith('generation 2/10 [2x2] | 8 evaluations, 3.2/s | best fitness 0.525')
     assert '(position_1 0.5, orientation_1 0.25)' in line and line.endswith('about 42 s left')
+    # a long run's time left in hours and minutes, not raw seconds
+    assert progress_line(summary, 10, 3.2, 5400.0).endswith('about 1 h 30 min left')
+    assert progress_line(summary, 10, 3.2, 754.0).endswith('about 12 min left')

@@ -51,7 +51,8 @@ class Watched:
         else:   # `hand-codesign run` on a test host
             self.process = subprocess.Popen(
                 host + [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
-                        '--evaluators', str(evaluators), '--bag', str(bag), *BUDGET, *extra],
+                        '--evaluators', str(evaluators), '--bag', str(bag),
+                        '--domain-id', 'auto', *BUDGET, *extra],
                 cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         self.lines = []
         self.reader = threading.Thread(target=lambda: self.lines.extend(self.process.stdout),

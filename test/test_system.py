@@ -13,6 +13,7 @@ import json
 import os
 import pathlib
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -42,9 +43,9 @@ def free_domain():
 
 
 def start_run(bag, evaluators, extra=(), budget=BUDGET, domain=None, task=TASK):
-    # without --domain-id the runner claims a free domain itself, also when other test
+    # `--domain-id auto`: the runner claims a free domain itself, also when other test
     # sessions run on this host at the same time
-    chosen = ['--domain-id', str(domain)] if domain is not None else []
+    chosen = ['--domain-id', str(domain) if domain is not None else 'auto']
     command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(task),
                '--evaluators', str(evaluators), '--bag', str(bag), *chosen, *budget, *extra]
     return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
@@ -359,31 +360,55 @@ def test_nodes_started_by_hand_with_parameter_files(tmp_path):
         nodes_by_hand(tmp_path, dict(os.environ, ROS_DOMAIN_ID=str(domain_id)))
 
 
+def node_names(env, expected):
+    """Return the node names the domain of env holds (`ros2 node list`), once `expected` are."""
+    probe = ('import rclpy, time; rclpy.init(); node = rclpy.create_node("probe"); '
+             'end = time.monotonic() + 30\n'
+             f'while len(node.get_node_names()) < {expected} and time.monotonic() < end: '
+             'time.sleep(0.1)\n'
+             'print(" ".join(node.get_node_names()))')
+    return subprocess.run([sys.executable, '-c', probe], env=env, capture_output=True,
+                          text=True, check=True, timeout=60).stdout.split()
+
+
 def nodes_by_hand(tmp_path, env):
+    # started from a folder outside the repository, as `ros2 run` from a user's home: the
+    # optimizer's file names its task relative to the package (found in its share/)
     bin_folder = pathlib.Path(sys.prefix) / 'bin'
     config = ROOT / 'config'
 
-    def node(name, *parameters, **popen):
+    def node(name, *parameters, remaps=(), **popen):
         command = [str(bin_folder / name), '--ros-args', '--params-file',
                    str(config / f'{name}.yaml')]
         for parameter in parameters:
             command += ['-p', parameter]
-        return subprocess.Popen(command, cwd=ROOT, env=env, **popen)
+        for remap in remaps:
+            command += ['-r', remap]
+        return subprocess.Popen(command, cwd=tmp_path, env=env, **popen)
 
     bag = tmp_path / 'by-hand'
     recorder = node('recorder', f'bag_path:={bag}')
-    evaluator = node('evaluator', 'subscribers_expected:=2', stdout=subprocess.DEVNULL)
+    # two evaluators started alike (one given an id), each named after its id
+    evaluators = [node('evaluator', 'subscribers_expected:=2', stdout=subprocess.DEVNULL),
+                  node('evaluator', 'subscribers_expected:=2', 'evaluator_id:=lab-hand-2',
+                       stdout=subprocess.DEVNULL)]
+    # renamed: the `/**:` parameter file still gives it its task file
     optimizer = node('optimizer', 'iterations:=2', 'population:=4', 'world_states:=2',
-                     f'result_file:={tmp_path / "result.json"}', stderr=subprocess.PIPE,
-                     text=True)
+                     'evaluators_expected:=2', f'result_file:={tmp_path / "result.json"}',
+                     remaps=['__node:=my_optimizer'], stderr=subprocess.PIPE, text=True)
     try:
         _, log = optimizer.communicate(timeout=180)
         assert optimizer.returncode == 0, log
+        names = node_names(env, expected=4)   # the probe, the recorder, the evaluators
     finally:
-        for process in (optimizer, evaluator, recorder):
+        for process in (optimizer, *evaluators, recorder):
             if process.poll() is None:
                 process.send_signal(signal.SIGINT)
             process.wait(timeout=60)
+    evaluator_names = {name for name in names if name not in ('probe', 'recorder')}
+    assert 'lab_hand_2' in evaluator_names and len(evaluator_names) == 2, names
+    assert f'{socket.gethostname()}_{evaluators[0].pid}'.replace('-', '_') in {
+        name.removeprefix('evaluator_') for name in evaluator_names}, names
     result = json.loads((tmp_path / 'result.json').read_text())
     assert result['task'] == 'task5' and result['evaluations'] == 8
     summaries_table = read_run(bag).generation_summaries
@@ -399,3 +424,38 @@ def test_evaluator_keeps_its_heartbeat_while_it_evaluates(tmp_path):
     assert np.max(record.evaluations['wall_time']) > 1.5
     stamps = np.sort(record.evaluator_status['stamp']) * 1e-9
     assert np.max(np.diff(stamps)) < 1.0
+
+
+# what `ros2 topic echo /generation_summary` in the user's shell does: wait for a summary
+LISTENER = """
+import time
+import rclpy
+from hand_codesign.ros import topics
+rclpy.init()
+node = rclpy.create_node('shell_listener')
+heard = []
+name = topics.GENERATION_SUMMARY
+node.create_subscription(topics.MESSAGE_TYPES[name], name, heard.append, topics.QOS[name])
+end = time.monotonic() + 120
+while not heard and time.monotonic() < end:
+    rclpy.spin_once(node, timeout_sec=0.1)
+print(len(heard))
+"""
+
+
+def test_run_joins_the_ros_domain_of_the_users_shell(tmp_path):
+    for attempt in range(5):   # another run of this host may claim the free domain first
+        domain = free_domain()
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+        listener = subprocess.Popen([sys.executable, '-c', LISTENER], env=env,
+                                    stdout=subprocess.PIPE, text=True)
+        command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
+                   '--evaluators', '1', '--bag', str(tmp_path / str(attempt)), *BUDGET]
+        run = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True,
+                             timeout=300)
+        heard, _ = listener.communicate(timeout=150)
+        if 'in use by another run' not in run.stderr:
+            break
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert f"ROS_DOMAIN_ID={domain} (the environment's ROS_DOMAIN_ID)" in run.stdout
+    assert int(heard) >= 1

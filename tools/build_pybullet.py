@@ -20,10 +20,10 @@ Steps (about 10 minutes on 2 idle cores, once; the result is cached, see CACHE):
    the built one in its place.
 
 If any step fails (no compiler, no network) the wheel stays and one line says why: a slower
-physics engine, never a broken set-up. `HAND_CODESIGN_PYBULLET=wheel make setup` skips the
-build; `python tools/build_pybullet.py --restore` puts the wheel's module back.
+physics engine, never a broken set-up. `make setup` keeps the wheel; `make fast-physics` runs
+this build; `python tools/build_pybullet.py --restore` puts the wheel's module back.
 
-Usage: python tools/build_pybullet.py [--restore]    (run by `make setup` with .venv's python)
+Usage: python tools/build_pybullet.py [--restore]  (run by `make fast-physics` with .venv's python)
 """
 
 import argparse
@@ -169,10 +169,6 @@ def main():
     parser.add_argument('--restore', action='store_true', help="put the wheel's module back")
     arguments = parser.parse_args()
     if arguments.restore:
-        restore()
-        return 0
-    if os.environ.get('HAND_CODESIGN_PYBULLET') == 'wheel':
-        print('[setup] PyBullet: HAND_CODESIGN_PYBULLET=wheel, keeping the wheel')
         restore()
         return 0
     version = importlib.metadata.version('pybullet')

@@ -8,7 +8,8 @@ Layout of `--out DIR` for one experiment (`hand_codesign.commands.reproduce` wri
     runs/<configuration>-seed<k>/ the run's bag (a normal `hand-codesign run` folder);
     runs/<...>-seed<k>.resume1/   the bag of its continuation after an interruption, and so on
     measures/<run>.json           the run's best design measured on unseen worlds (cache)
-    <experiment>.csv, .md, *.png  the tables (a row per configuration) and figures
+    <experiment>.csv, .md, *.png  the tables (a row per configuration) and figures (.svg or
+                                  .pdf with `reproduce --format`)
 
 Everything here is recomputed from the bags: delete `measures/` and the tables and run
 `reproduce` again, and the same numbers come back (the measures are deterministic).
@@ -298,6 +299,7 @@ def plot_errors(path, groups, tolerance, title, kinds=None):
     Box plots of the pooled initial and final errors per group [(label, record list)].
 
     One panel per error kind (default: the tolerance's); the tolerance is drawn on its own.
+    The file's suffix (.png, .svg, .pdf) is its format.
     """
     import matplotlib
     matplotlib.use('Agg')
@@ -359,24 +361,58 @@ def convergence_panels(out, experiment, seeds):
     return panels
 
 
+def seed_band(curves):
+    """
+    Return (evaluations, 25th percentile, median, 75th percentile) of curves across seeds.
+
+    curves: [(seed, (evaluations told, best fitness so far))]. Each seed's best so far is a
+    step function of the evaluations: at every evaluation count any seed told, it is its value
+    at the last count told up to there (held after the seed's run ended, which cannot improve
+    it); NaN before its first, and left out of the percentiles there.
+    """
+    told = [np.asarray(values[0], dtype=float) for _, values in curves if len(values[0])]
+    best = [np.asarray(values[1], dtype=float) for _, values in curves if len(values[0])]
+    grid = np.unique(np.concatenate(told)) if told else np.zeros(0)
+    steps = np.full((len(told), len(grid)), np.nan)
+    for row, (seed_told, seed_best) in enumerate(zip(told, best)):
+        order = np.argsort(seed_told, kind='stable')
+        last = np.searchsorted(seed_told[order], grid, side='right') - 1
+        steps[row] = np.where(last >= 0, seed_best[order][np.maximum(last, 0)], np.nan)
+    with np.errstate(all='ignore'):
+        low, middle, high = (np.nanpercentile(steps, q, axis=0) if len(told) else grid
+                             for q in (25, 50, 75))
+    return grid, low, middle, high
+
+
 def plot_convergence(path, panels, title):
-    """Best fitness so far against evaluations, a panel per configuration, a line per seed."""
+    """
+    Best fitness so far against evaluations, every configuration on one shared axis.
+
+    Per configuration (one colour): the median across seeds as a line and the band between
+    the 25th and 75th percentiles, over thin lines of the seeds. The file's suffix (.png,
+    .svg, .pdf) is its format.
+    """
     import matplotlib
     matplotlib.use('Agg')
     from matplotlib import pyplot
-    figure, axes = pyplot.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.0),
-                                   squeeze=False)
-    for axis, (label, curves) in zip(axes[0], panels):
-        for seed, (told, best) in curves:
+    figure, axis = pyplot.subplots(figsize=(7.5, 4.8))
+    for index, (label, curves) in enumerate(panels):
+        colour = f'C{index % 10}'
+        for _, (told, best) in curves:
             if len(told):
-                axis.plot(told, best, marker='.', label=f'seed {seed}')
-        axis.set_yscale('log')
-        axis.set_xlabel('evaluations')
-        axis.set_ylabel('best weighted fitness so far')
-        axis.set_title(label, fontsize='medium')
-        axis.grid(True, alpha=0.3)
-        axis.legend(fontsize='small')
-    figure.suptitle(title, fontsize='medium')
+                axis.step(told, best, where='post', color=colour, linewidth=0.6, alpha=0.35)
+        grid, low, middle, high = seed_band(curves)
+        seeds = sum(1 for _, (told, _) in curves if len(told))
+        axis.fill_between(grid, low, high, step='post', color=colour, alpha=0.2, linewidth=0)
+        axis.step(grid, middle, where='post', color=colour, linewidth=2,
+                  label=f'{label}: median of {seeds} seeds')
+    axis.set_yscale('log')
+    axis.set_xlabel('evaluations')
+    axis.set_ylabel('best weighted fitness so far')
+    axis.grid(True, alpha=0.3)
+    axis.legend(fontsize='small')
+    axis.set_title(f'{title}\nmedian across seeds, band: 25th to 75th percentile, thin: '
+                   'each seed', fontsize='medium')
     figure.tight_layout()
     figure.savefig(path, dpi=90)
     pyplot.close(figure)
@@ -469,13 +505,17 @@ def structure_rows(experiment, budget, measured):
     return rows
 
 
-def write_results(out, experiment, budget, seeds):
-    """Write the tables (.csv, .md) and figures of a campaign folder; return their paths."""
+def write_results(out, experiment, budget, seeds, figure_format='png'):
+    """
+    Write the tables (.csv, .md) and figures of a campaign folder; return their paths.
+
+    figure_format: 'png', 'svg' or 'pdf', the figures' format (report.md shows each).
+    """
     out = pathlib.Path(out)
     measured = load_measures(out, experiment, seeds)
     rows = configuration_rows(experiment, budget, measured)
     name = experiment.name
-    paths = [out / f'{name}.csv', out / f'{name}.md', out / f'{name}.png']
+    paths = [out / f'{name}.csv', out / f'{name}.md', out / f'{name}.{figure_format}']
     write_table(out, name, rows, experiment.also)
     lines = [f'# {name}', '', experiment.summary + '.', '',
              f'Budget {budget.describe()}; {seeds_text(seeds)}; a row per configuration, '
@@ -494,7 +534,7 @@ def write_results(out, experiment, budget, seeds):
         by_structure = load_measures(out, experiment, seeds, '.structures')
         rows = structure_rows(experiment, budget, by_structure)
         write_table(out, f'{name}-structures', rows, experiment.also)
-        figure = out / f'{name}-structures.png'
+        figure = out / f'{name}-structures.{figure_format}'
         plot_errors(figure, [(row['structure'], [values for record in
                                                  by_structure[row['configuration'].split()[0]]
                                                  for text, values in record.items()
@@ -508,7 +548,7 @@ def write_results(out, experiment, budget, seeds):
         paths += [out / f'{name}-structures.csv', figure]
     panels = convergence_panels(out, experiment, seeds) if experiment.convergence else []
     if panels:
-        figure = out / f'{name}-convergence.png'
+        figure = out / f'{name}-convergence.{figure_format}'
         plot_convergence(figure, panels, f'{name}, {budget.name} budget')
         lines += ['## Convergence', '', f'![{figure.name}]({figure.name})', '']
         paths.append(figure)

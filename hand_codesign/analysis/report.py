@@ -18,8 +18,10 @@ Writes into DIR (default: `<bag>_report` next to the bag):
   the archive over its two descriptors, each cell coloured by its elite's weighted sum, and
   every elite (candidate id, generation, cell, descriptor values, weighted sum), best first.
   The archive is rebuilt by replaying the search from the bag's evaluations.
+- `best_design.png`: the best design re-simulated in the run's world 0, drawn at the start
+  and at the end of the rollout (analysis.design_picture).
 - `report.md`: task, seed, budget, wall time, evaluations per second, the figures, and the
-  best design with its parameters in physical units; for a run with restarts (ipop-cma,
+  best design, its picture and its parameters in physical units; for a run with restarts (ipop-cma,
   bipop-cma) the generation, population and cause of each restart (the search replayed); for
   a quality-diversity run the archive's best designs.
 
@@ -32,10 +34,14 @@ from hand_codesign.analysis import records
 from hand_codesign.analysis.rig_report import rig_comparison
 from hand_codesign.analysis.trust import trust_facts
 from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.task import TaskError
+from hand_codesign.core.worlds import world_states
 from hand_codesign.errors import UserError
+from hand_codesign.version import version_text
 import numpy as np
 
 MAX_TABLE_ROWS = 12
+DESIGN_PICTURE = 'best_design.png'
 ELITES_LISTED = 10  # the archive's best designs in the terminal and in report.md
 
 
@@ -279,6 +285,7 @@ class Report:
         self.archive = records.archive_of(record)  # of cma-mae, cma-me; else None
         self.elites = self.archive.elites() if self.archive is not None else []
         self.rig = rig_comparison(record)   # prediction against measurement, if any
+        self.picture = None   # best_design.png, once written
 
     # ---------------------------------------------------------------- facts
 
@@ -472,10 +479,29 @@ class Report:
             files.append(out / 'rig_gap.csv')
             self.rig.write_csv(files[-1])
             files.append(self.rig.plot(out / 'rig_gap.png', _pyplot()))
+        files += self.write_picture(out / DESIGN_PICTURE)
         files.append(out / 'report.md')
         files[-1].write_text(self.markdown([figure.name for figure in figures]),
                              encoding='utf-8')
         return files
+
+    def write_picture(self, path):
+        """Draw the best design at the start and end of world 0; return [path], or []."""
+        self.picture = None
+        if self.best is None or self.task is None:
+            return []
+        try:
+            task = records.design_task(self.record, self.best)
+        except (UserError, TaskError) as error:   # a bag whose design cannot be rebuilt
+            self.task_problem = self.task_problem or str(error)
+            return []
+        if len(self.best.x) != genome_spec(task).size:   # a bag of another task's genomes
+            return []
+        # imported here: the picture simulates (PyBullet), the rest of the report does not
+        from hand_codesign.analysis.design_picture import write_design_picture
+        self.picture = write_design_picture(path, task, self.best, world_states(task)[0],
+                                            _pyplot())
+        return [self.picture]
 
     def write_generations_csv(self, path):
         generations = self.generations
@@ -511,6 +537,7 @@ class Report:
         """Return report.md."""
         lines = [f'# Run {self.record.run_id or "(unknown)"}', '', '| | |', '|---|---|']
         lines += [f'| {label} | {_markdown_cell(text)} |' for label, text in self.facts()]
+        lines.append(f'| report by | hand-codesign {version_text()} |')
         if self.record.warnings:
             lines += ['', '## Warnings from reading the bag', '']
             lines += [f'- {_markdown_cell(warning)}' for warning in self.record.warnings]
@@ -549,6 +576,11 @@ class Report:
                      f'{design.evaluator_id or "(no evaluation in the bag)"}'
                      + (f' up to the horizon {design.horizon:g} s (its objectives are those of '
                         'that sub-problem).' if design.horizon else '.'))
+        if self.picture is not None:
+            lines += ['', f'![The best design at the start and the end of world 0]'
+                          f'({self.picture.name})', '',
+                      'Re-simulated in world 0 of the run (`hand-codesign replay BAG --world 0` '
+                      'animates it): start and end of the rollout.']
         if design.objectives is not None:
             lines += ['', '| objective | value |', '|---|---|']
             lines += [f'| {name} | {value:.6g} |'

@@ -47,7 +47,8 @@ def evaluate_command(arguments):
     out = pathlib.Path(arguments.out or f'{str(arguments.bag).rstrip("/")}_rig').resolve()
     if out.exists():
         raise UserError(f'--out {out}: already exists; choose a new path')
-    with tempfile.TemporaryDirectory() as folder, claimed_domain(arguments.domain_id) as domain:
+    with tempfile.TemporaryDirectory() as folder, claimed_domain(
+            None if arguments.domain_id in (None, 'auto') else arguments.domain_id) as domain:
         plan = pathlib.Path(folder) / 'plan.json'
         plan.write_text(plan_text(run, designs), encoding='utf-8')
         system = System(out, domain)

@@ -30,6 +30,7 @@ from hand_codesign.commands.run import termination_as_interrupt
 from hand_codesign.core import experiments, preview
 from hand_codesign.core.hierarchy import GROWN_FROM
 from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.summary import format_duration
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 import numpy as np
@@ -52,7 +53,8 @@ def reproduce_command(arguments):
     out = pathlib.Path(arguments.out or f'results/{arguments.experiment}-{arguments.budget}')
     campaigns = [Campaign(experiment, arguments.budget, seeds,
                           out if len(chosen) == 1 else out / experiment.name,
-                          chosen_configurations(experiment, arguments.only))
+                          chosen_configurations(experiment, arguments.only),
+                          figure_format=getattr(arguments, 'format', 'png'))
                  for experiment in chosen]
     for item in campaigns:
         item.prepare()
@@ -165,22 +167,13 @@ class Progress:
         self.pending.remove(steps)
 
 
-def format_duration(seconds):
-    """Return e.g. '1 h 05 min', '12 min' or '40 s'."""
-    seconds = int(round(seconds))
-    if seconds < 60:
-        return f'{seconds} s'
-    minutes = seconds // 60
-    if minutes < 60:
-        return f'{minutes} min'
-    return f'{minutes // 60} h {minutes % 60:02d} min'
-
-
 class Campaign:
     """One experiment's campaign in its folder: its runs, measures and tables."""
 
-    def __init__(self, experiment, budget_name, seeds, out, configurations=None):
+    def __init__(self, experiment, budget_name, seeds, out, configurations=None,
+                 figure_format='png'):
         self.experiment = experiment
+        self.figure_format = figure_format   # of the figures: png, svg or pdf
         self.budget = experiment.budget(budget_name)
         self.seeds = tuple(seeds or range(1, self.budget.seeds + 1))
         self.out = pathlib.Path(out)
@@ -288,7 +281,8 @@ class Campaign:
         self.runs_dir.mkdir(parents=True, exist_ok=True)
         previous = campaign.attempts(self.runs_dir, key)
         bag = campaign.next_attempt(self.runs_dir, key)
-        common = ['--bag', str(bag), '--evaluators', str(evaluators), '--quiet']
+        common = ['--bag', str(bag), '--evaluators', str(evaluators), '--quiet',
+                  '--domain-id', 'auto']   # campaigns side by side never share a domain
         if previous:
             code = self.call(['--resume', str(previous[-1])] + common)
             if code != RESUME_REFUSED:
@@ -364,7 +358,8 @@ class Campaign:
 
     def write_results(self):
         """Write the experiment's tables and figures from its runs' measures."""
-        paths = campaign.write_results(self.out, self.experiment, self.budget, self.seeds)
+        paths = campaign.write_results(self.out, self.experiment, self.budget, self.seeds,
+                                       self.figure_format)
         print(f'reproduce: {self.experiment.name} ({self.budget.describe()}, '
               f'{experiments.seeds_text(self.seeds)}): '
               f'{", ".join(str(path) for path in paths)}', flush=True)

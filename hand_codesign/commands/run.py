@@ -24,6 +24,7 @@ from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 from hand_codesign.ros.discovery import DiscoveryServer
 from hand_codesign.ros.runner import claimed_domain
+from hand_codesign.ros.runner import MAX_DOMAIN_ID
 from hand_codesign.ros.runner import System
 
 OPTIMIZER_MODULE = 'hand_codesign.commands.optimizer'
@@ -45,7 +46,8 @@ def run_command(arguments):
     keys = RunKeys(new_secret())
     discovery = (DiscoveryServer(arguments.discovery_server)
                  if arguments.discovery_server is not None else None)
-    with claimed_domain(arguments.domain_id) as domain_id:
+    requested_domain, domain_source = run_domain(arguments.domain_id)
+    with claimed_domain(requested_domain) as domain_id:
         live = None if arguments.live is None else (arguments.live_host, arguments.live)
         system = System(bag, domain_id, quiet=arguments.quiet, discovery=discovery,
                         start_timeout=start_timeout(arguments), live=live, keys=keys)
@@ -56,7 +58,7 @@ def run_command(arguments):
                 f'{domain_id} and -p key_file:={path})')
         source = arguments.task or f'resumed from {arguments.resume}'
         say(f'run: task {task.name} ({source}), evaluators: {arguments.evaluators}, '
-            f'ROS_DOMAIN_ID={domain_id}, bag {bag}')
+            f'ROS_DOMAIN_ID={domain_id} ({domain_source}), bag {bag}')
         try:
             with termination_as_interrupt():
                 system.rig_parameters = rig_parameters(arguments)
@@ -76,6 +78,26 @@ def run_command(arguments):
     print(f'bag: {bag}')
     print(f'best design: {best_design_line(bag / "result.json")}')
     return 0
+
+
+def run_domain(option, environment=os.environ):
+    """
+    Return (ROS domain id to hold, None for a free one; how it was chosen, for the user).
+
+    option: --domain-id, 'auto', an int or None. None takes the environment's ROS_DOMAIN_ID,
+    as every ROS 2 tool does, so that `ros2 topic echo` in the user's shell sees the run.
+    """
+    if option == 'auto':
+        return None, 'a free one of this host: --domain-id auto'
+    if option is not None:
+        return option, '--domain-id'
+    text = environment.get('ROS_DOMAIN_ID', '').strip()
+    if not text:
+        return 0, "ROS_DOMAIN_ID is not set: ROS 2's default; --domain-id auto picks a free one"
+    if not text.isdigit() or int(text) > MAX_DOMAIN_ID:
+        raise UserError(f'ROS_DOMAIN_ID={text!r} in the environment: expected 0 to '
+                        f'{MAX_DOMAIN_ID} (or run with --domain-id ID or --domain-id auto)')
+    return int(text), "the environment's ROS_DOMAIN_ID"
 
 
 def start_timeout(arguments):

@@ -54,4 +54,16 @@ def progress_line(summary, iterations, rate, seconds_left):
                     f'{summary["spent"]}/{summary["budget"]} evaluations)')
     return (f'{position} [{structure}] | '
             f'{summary["evaluations"]} evaluations, {rate:.1f}/s | best fitness '
-            f'{summary["best_fitness"]:.4g} ({best}) | about {seconds_left:.0f} s left')
+            f'{summary["best_fitness"]:.4g} ({best}) | '
+            f'about {format_duration(seconds_left)} left')
+
+
+def format_duration(seconds):
+    """Return a duration for people: e.g. '1 h 05 min', '12 min' or '40 s'."""
+    seconds = int(round(seconds))
+    if seconds < 60:
+        return f'{seconds} s'
+    minutes = seconds // 60
+    if minutes < 60:
+        return f'{minutes} min'
+    return f'{minutes // 60} h {minutes % 60:02d} min'

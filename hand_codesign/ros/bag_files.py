@@ -31,11 +31,13 @@ import pathlib
 import re
 import struct
 
+from hand_codesign.ros.mcap_writer import add_rosbag2_record
+from hand_codesign.ros.mcap_writer import bag_metadata
+from hand_codesign.ros.mcap_writer import file_information
 from hand_codesign.ros.mcap_writer import LIBRARY
-from hand_codesign.ros.mcap_writer import MESSAGE_ENCODING
 from hand_codesign.ros.mcap_writer import message_key
-from hand_codesign.ros.mcap_writer import METADATA_VERSION
 from hand_codesign.ros.mcap_writer import PROFILE
+from hand_codesign.ros.mcap_writer import topic_information
 from mcap.exceptions import EndOfFile
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
@@ -116,6 +118,8 @@ def _rewrite(path, partial):
         # the ids stay those of the cut-off file (ours count from 1 as mcap's Writer does),
         # so that they stay those of the other files of the bag
         schema_ids, channel_ids, started = {}, {}, False
+        # what the rosbag2 record of the file says: its channels, their counts, its times
+        schema_names, channels, counts, times = {}, {}, {}, [None, None]
         for record in records(path):
             kind = type(record)
             if kind is Header:
@@ -125,16 +129,29 @@ def _rewrite(path, partial):
             elif kind is Schema and record.id not in schema_ids:
                 schema_ids[record.id] = writer.register_schema(
                     record.name, record.encoding, record.data)
+                schema_names[record.id] = record.name
             elif kind is Channel and record.id not in channel_ids:
                 channel_ids[record.id] = writer.register_channel(
                     record.topic, record.message_encoding,
                     schema_ids.get(record.schema_id, 0), dict(record.metadata))
+                channels[record.id] = record
             elif kind is Message and record.channel_id in channel_ids:
                 writer.add_message(channel_ids[record.channel_id], record.log_time,
                                    record.data, record.publish_time, record.sequence)
+                counts[record.channel_id] = counts.get(record.channel_id, 0) + 1
+                times = [min(times[0] or record.log_time, record.log_time),
+                         max(times[1] or record.log_time, record.log_time)]
                 kept += 1
         if not started:     # cut off before its header: an empty bag file
             writer.start(profile=PROFILE, library=LIBRARY)
+        # as the recorder would have on close (a cut-off file never holds this record)
+        add_rosbag2_record(writer, [
+            topic_information(channel.topic, schema_names.get(channel.schema_id, ''),
+                              channel.metadata.get('offered_qos_profiles'),
+                              channel.metadata.get('topic_type_hash', ''),
+                              counts.get(channel_id, 0))
+            for channel_id, channel in channels.items()],
+            file_information(path.name, times[0] or 0, times[1] or 0, kept))
         writer.finish()
         stream.flush()
         os.fsync(stream.fileno())
@@ -212,40 +229,15 @@ def write_metadata(folder):
     """Write the rosbag2 metadata.yaml of a bag folder from the summaries of all its files."""
     folder = pathlib.Path(folder)
     topics, files = {}, []
-    starts, ends = [], []
     for path in bag_files(folder):
         channels, names, counts, start, end, count = _file_summary(path)
         for channel_id, channel in channels.items():
-            entry = topics.setdefault(channel.topic, {
-                'topic_metadata': {
-                    'name': channel.topic, 'type': names.get(channel.schema_id, ''),
-                    'serialization_format': MESSAGE_ENCODING,
-                    'offered_qos_profiles': yaml.safe_load(
-                        channel.metadata.get('offered_qos_profiles') or '[]') or [],
-                    'type_description_hash': channel.metadata.get('topic_type_hash', '')},
-                'message_count': 0})
+            entry = topics.setdefault(channel.topic, topic_information(
+                channel.topic, names.get(channel.schema_id, ''),
+                channel.metadata.get('offered_qos_profiles'),
+                channel.metadata.get('topic_type_hash', ''), 0))
             entry['message_count'] += counts.get(channel_id, 0)
-        if count:
-            starts.append(start)
-            ends.append(end)
-        files.append({'path': path.name,
-                      'starting_time': {'nanoseconds_since_epoch': start if count else 0},
-                      'duration': {'nanoseconds': end - start if count else 0},
-                      'message_count': count})
-    start = min(starts) if starts else 0
-    metadata = {'rosbag2_bagfile_information': {
-        'version': METADATA_VERSION,
-        'storage_identifier': 'mcap',
-        'duration': {'nanoseconds': max(ends) - start if ends else 0},
-        'starting_time': {'nanoseconds_since_epoch': start},
-        'message_count': sum(entry['message_count'] for entry in topics.values()),
-        'topics_with_message_count': list(topics.values()),
-        'compression_format': '',
-        'compression_mode': '',
-        'relative_file_paths': [entry['path'] for entry in files],
-        'files': files,
-        'custom_data': {},
-        'ros_distro': 'jazzy',
-    }}
+        files.append(file_information(path.name, start, end, count))
+    metadata = {'rosbag2_bagfile_information': bag_metadata(list(topics.values()), files)}
     (folder / 'metadata.yaml').write_text(
         yaml.safe_dump(metadata, sort_keys=False, default_flow_style=False), encoding='utf-8')

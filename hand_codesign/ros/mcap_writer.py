@@ -10,8 +10,11 @@ Foxglove, mcap-ros2-support and rosbags read our bags like any recorded with ``r
 - one channel per topic (absolute name), message encoding ``cdr``, and in its metadata the
   publishers' ``offered_qos_profiles`` (a YAML list, as rosbag2 serializes it) and the
   ``topic_type_hash`` (RIHS01) of the type;
-- zstd-compressed chunks with message indexes, then the summary (schemas, channels,
-  statistics, chunk indexes, summary offsets) and the footer on close.
+- zstd-compressed chunks with message indexes; on close a metadata record named ``rosbag2``
+  whose ``serialized_metadata`` is the YAML of the file's BagMetadata (what ``ros2 bag info``
+  reads of a bare file: the metadata version, hence the QoS format, and the distribution),
+  then the summary (schemas, channels, statistics, chunk and metadata indexes, summary
+  offsets) and the footer.
 
 A bag is either one ``.mcap`` file (``ros2 bag info file.mcap``, ``ros2 bag play file.mcap``,
 rosbags and mcap all read a bare file) or, for a path without the ``.mcap`` suffix, a rosbag2
@@ -57,6 +60,8 @@ LIBRARY = 'hand_codesign.mcap_writer'
 DEFINITION_DELIMITER = '=' * 80
 # rosbag2 reads a directory's metadata.yaml of version 9 (Jazzy) with QoS enums as names.
 METADATA_VERSION = 9
+# rosbag2's MCAP storage plugin keeps the bag's metadata in a metadata record of this name
+ROSBAG2_RECORD, ROSBAG2_RECORD_KEY = 'rosbag2', 'serialized_metadata'
 
 # The field-type pattern and primitive list of rosbag2's local message definition source:
 # keeping them identical makes our schema text byte-identical to the one rosbag2 writes.
@@ -210,6 +215,61 @@ def qos_profiles_yaml(profiles):
     return yaml.safe_dump(dicts, sort_keys=False, default_flow_style=False).rstrip('\n')
 
 
+def topic_information(topic, type_name, offered_qos_profiles, type_description_hash, count):
+    """Return rosbag2's TopicInformation of a topic (version 9: QoS profiles as a list)."""
+    return {'topic_metadata': {
+        'name': topic, 'type': type_name, 'serialization_format': MESSAGE_ENCODING,
+        'offered_qos_profiles': yaml.safe_load(offered_qos_profiles or '[]') or [],
+        'type_description_hash': type_description_hash},
+        'message_count': count}
+
+
+def file_information(name, start, end, count):
+    """Return rosbag2's FileInformation of one file (times in ns since the epoch)."""
+    return {'path': name, 'starting_time': {'nanoseconds_since_epoch': start if count else 0},
+            'duration': {'nanoseconds': end - start if count else 0}, 'message_count': count}
+
+
+def bag_metadata(topics, files):
+    """
+    Return rosbag2's BagMetadata (Jazzy, version 9) of TopicInformation and FileInformation.
+
+    The same record is metadata.yaml's `rosbag2_bagfile_information` and, serialized, the
+    `serialized_metadata` of the "rosbag2" metadata record inside each MCAP file (ROSBAG2_RECORD).
+    """
+    counted = [entry for entry in files if entry['message_count']]
+    start = min((entry['starting_time']['nanoseconds_since_epoch'] for entry in counted),
+                default=0)
+    end = max((entry['starting_time']['nanoseconds_since_epoch']
+               + entry['duration']['nanoseconds'] for entry in counted), default=0)
+    return {
+        'version': METADATA_VERSION,
+        'storage_identifier': 'mcap',
+        'duration': {'nanoseconds': end - start},
+        'starting_time': {'nanoseconds_since_epoch': start},
+        'message_count': sum(entry['message_count'] for entry in topics),
+        'topics_with_message_count': list(topics),
+        'compression_format': '',
+        'compression_mode': '',
+        'relative_file_paths': [entry['path'] for entry in files],
+        'files': list(files),
+        'custom_data': {},
+        'ros_distro': 'jazzy',
+    }
+
+
+def add_rosbag2_record(writer, topics, file):
+    """
+    Add the metadata record rosbag2's MCAP storage writes when it closes a file.
+
+    `ros2 bag info file.mcap` reads it (version, QoS format, distribution); without it rosbag2
+    falls back to defaults. topics: TopicInformation of the file; file: its FileInformation.
+    """
+    text = yaml.safe_dump(bag_metadata(topics, [file]), sort_keys=False,
+                          default_flow_style=False)
+    writer.add_metadata(ROSBAG2_RECORD, {ROSBAG2_RECORD_KEY: text})
+
+
 def holds_bag(folder):
     """Return whether a folder holds the files of a bag (its metadata or an MCAP file)."""
     return (folder / 'metadata.yaml').exists() or any(folder.glob('*.mcap'))
@@ -352,6 +412,7 @@ class BagWriter:
             return
         self.closed = True
         try:
+            self._add_rosbag2_record()
             self._writer.finish()
             self._stream.flush()
             os.fsync(self._stream.fileno())
@@ -360,6 +421,13 @@ class BagWriter:
         self._unflushed = 0
         if self.is_directory:
             self._write_metadata_yaml()
+
+    def _add_rosbag2_record(self):
+        topics = [topic_information(topic, type_name, qos, type_hash(type_name),
+                                    self.message_counts[topic])
+                  for topic, (_, type_name, qos) in self._channels.items()]
+        add_rosbag2_record(self._writer, topics, file_information(
+            self.file_path.name, self.first_time or 0, self.last_time or 0, self.message_count))
 
     def _check_open(self):
         if self.closed:

@@ -24,6 +24,7 @@ from hand_codesign.ros.conversions import summary_message
 from hand_codesign.ros.keys import OptimizerSigner
 from hand_codesign.ros.node_main import on_line
 from hand_codesign.ros.node_main import run_node
+from hand_codesign.ros.package_files import package_file
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign.ros.topics import deliver
 from hand_codesign_msgs.msg import RunInfo
@@ -33,7 +34,7 @@ from rclpy.task import Future
 
 # name: (default, description, (lowest, highest) or None)
 PARAMETERS = {
-    'task_file': ('', 'task file (YAML) to optimize', None),
+    'task_file': ('', 'task file (YAML); a relative one also in the package share/', None),
     'seed': (-1, "run seed; -1 keeps the task file's", (-1, 2**32 - 1)),
     'iterations': (0, "generations; 0 keeps the task file's", (0, 10**6)),
     'population': (0, "candidates per generation; 0 keeps the task file's", (0, 10**5)),
@@ -46,8 +47,7 @@ PARAMETERS = {
     'audit_fraction': (DEFAULT_FRACTION, 'share of answers audited (core.audits)', (0.0, 1.0)),
     'own_evaluators': ('', "roles of the run's own evaluators, a,b: see core.audits", None),
     'result_file': ('', 'write the final result as JSON here; empty: do not', None),
-    'resume_bag': ('', 'continue the interrupted run of this bag (its task, seed and budget; '
-                       'task_file and the budget parameters are then ignored)', None),
+    'resume_bag': ('', 'continue the run of this bag, with its task, seed and budget', None),
     'start_signal': (False, 'send nothing before a line arrives on standard input (the runner '
                             'sends it once its recorder records)', None),
 }
@@ -70,10 +70,10 @@ class OptimizerNode(Node):
             task = resumed.task
             self.log(resumed.describe())
         else:
-            seed = self.settings['seed']
-            task = load_run_task(self.settings['task_file'], None if seed < 0 else seed,
-                                 self.settings['iterations'], self.settings['population'],
-                                 self.settings['world_states'])
+            seed, path = self.settings['seed'], self.settings['task_file']
+            task = load_run_task(package_file(path, 'parameter task_file'),
+                                 None if seed < 0 else seed, self.settings['iterations'],
+                                 self.settings['population'], self.settings['world_states'])
         self.run = RunController(
             task, self.settings['run_id'] or default_run_id(task), self, resumed,
             self.settings['heartbeat_timeout'], self.settings['evaluation_timeout'],

@@ -3,6 +3,8 @@
 from rcl_interfaces.msg import FloatingPointRange
 from rcl_interfaces.msg import IntegerRange
 from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
 
 
 def descriptor(default, description, bounds):
@@ -28,3 +30,23 @@ def declare_read_only(node, table):
     return {name: node.declare_parameter(name, default,
                                          descriptor(default, description, bounds)).value
             for name, (default, description, bounds) in table.items()}
+
+
+def read_before_start(name, table):
+    """
+    Return {name: value} of table's parameters as a node called `name` would be given them.
+
+    For a node whose own name depends on its parameters (an evaluator is named after its id):
+    a short-lived node without services or /rosout reads them, so that a parameter file keyed
+    by the usual name still reaches the node under its final one.
+    """
+    reader = Node(name, start_parameter_services=False, enable_rosout=False)
+    try:
+        return declare_read_only(reader, table)
+    finally:
+        reader.destroy_node()
+
+
+def overrides(settings):
+    """Return {name: value} as the Parameter list of Node's parameter_overrides argument."""
+    return [Parameter(name, value=value) for name, value in settings.items()]

@@ -46,7 +46,8 @@ from hand_codesign.core.supervision import Supervisor
 from hand_codesign.errors import UserError
 from hand_codesign.ros.discovery import start_profile
 
-DOMAIN_IDS = range(1, 101)
+DOMAIN_IDS = range(1, 101)   # those a free pick (--domain-id auto) takes
+MAX_DOMAIN_ID = 232   # the highest ROS_DOMAIN_ID ROS 2 accepts
 STOP_TIMEOUT = 30.0
 
 
@@ -66,7 +67,8 @@ def claimed_domain(requested):
         finally:
             lock.close()
         return
-    raise UserError(f'ROS domain {requested} is in use by another run of this host'
+    raise UserError(f'ROS domain {requested} is in use by another run of this host: choose '
+                    'another with --domain-id ID, or a free one with --domain-id auto'
                     if requested is not None else 'no free ROS domain id on this host')
 
 
