@@ -33,6 +33,7 @@ from hand_codesign.analysis.rig_report import rig_comparison
 from hand_codesign.analysis.trust import trust_facts
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.errors import UserError
+from hand_codesign.outputs import staged
 import numpy as np
 
 MAX_TABLE_ROWS = 12
@@ -44,10 +45,11 @@ def analyze_command(arguments):
     record = records.open_run(arguments.bag)
     out = pathlib.Path(arguments.out) if arguments.out else default_report_dir(record.path)
     report = Report(record)
-    files = report.write(out)
-    print(report.summary_text())
-    if getattr(arguments, 'unseen', 0):
-        files += write_unseen(record.path, out, arguments.unseen)
+    with staged(out) as folder:
+        files = report.write(folder)
+        print(report.summary_text())
+        if getattr(arguments, 'unseen', 0):
+            files += write_unseen(record.path, folder, arguments.unseen)
     print(f'report: {out} ({", ".join(sorted(path.name for path in files))})')
     return 0
 
