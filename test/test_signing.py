@@ -152,6 +152,7 @@ def test_key_files_round_trip_and_bad_ones_say_what_is_wrong(tmp_path, monkeypat
     credential = RunKeys(SECRET).credential('host-b')
     path = tmp_path / 'host-b.key'
     path.write_text(credential.text())
+    path.chmod(0o600)
     monkeypatch.delenv('HAND_CODESIGN_EVALUATOR_KEY', raising=False)
     read, evaluator_id = evaluator_credential({'key_file': str(path), 'evaluator_id': ''})
     assert evaluator_id == 'host-b' and read.key == credential.key

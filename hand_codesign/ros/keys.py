@@ -12,6 +12,7 @@ import array
 import os
 import pathlib
 import socket
+import stat
 
 from hand_codesign.core.signing import Credential
 from hand_codesign.core.signing import CREDENTIAL_VARIABLE
@@ -69,10 +70,7 @@ def evaluator_credential(settings):
     text = os.environ.pop(CREDENTIAL_VARIABLE, '')
     source = CREDENTIAL_VARIABLE
     if key_file:
-        path = pathlib.Path(key_file)
-        if not path.is_file():
-            raise SigningError(f'parameter key_file: {path} is not a file')
-        text, source = path.read_text(), f'key_file {path}'
+        text, source = read_key_file(pathlib.Path(key_file)), f'key_file {key_file}'
     if not text:
         return None, evaluator_id or f'{socket.gethostname()}-{os.getpid()}'
     credential = Credential.parse(text, source)
@@ -80,6 +78,22 @@ def evaluator_credential(settings):
         raise SigningError(f'{source}: the key is for evaluator "{credential.evaluator_id}", '
                            f'but parameter evaluator_id is "{evaluator_id}"')
     return credential, credential.evaluator_id
+
+
+def read_key_file(path):
+    """Return the text of a key file, which must be a file that only its owner can read."""
+    if not path.is_file():
+        raise SigningError(f'parameter key_file: {path} is not a file')
+    try:
+        mode = stat.S_IMODE(path.stat().st_mode)
+        if mode & 0o077:
+            raise SigningError(
+                f'parameter key_file: {path} has mode {mode:04o}, so other users may read the '
+                f'key; expected 0600 as `hand-codesign run --write-key-file` writes it '
+                f'(chmod 600 {path})')
+        return path.read_text()
+    except (OSError, UnicodeDecodeError) as error:
+        raise SigningError(f'parameter key_file: {path}: cannot read it: {error}') from None
 
 
 def sign_evaluation(credential, message):
