@@ -265,6 +265,7 @@ def test_an_evaluator_with_its_key_that_lies_is_caught(one_evaluator_run, tmp_pa
     keys = RunKeys(secret)
     key_file = tmp_path / 'liar.key'
     key_file.write_text(keys.credential('liar').text())
+    key_file.chmod(0o600)
     with claimed_domain(None) as domain_id:
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain_id))
         lied = tmp_path / 'lied'
