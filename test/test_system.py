@@ -23,6 +23,7 @@ from hand_codesign.analysis.trust import trust_counts
 from hand_codesign.core.signing import new_secret
 from hand_codesign.core.signing import RunKeys
 from hand_codesign.ros.runner import claimed_domain
+from intruder import FORGED_SUMMARIES
 import numpy as np
 import psutil
 import pytest
@@ -234,6 +235,9 @@ def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run
     assert 0 < trust['rejected_evaluations'] <= forged
     record = read_run(disturbed, run_id=result['run_id'])
     assert 'foreign-run' in record.run_ids
+    # the forged summaries are in the bag, left out by every reader, and counted
+    assert record.rejected_summaries == FORGED_SUMMARIES
+    assert 'phantom' in set(record.evaluator_status['evaluator_id'])
     ignored = trust_counts(record)['rejected_by_evaluators']
     assert ignored >= 2 * 3 + 2, 'the unsigned candidates and RunInfo were not all ignored'
     answered = set(record.evaluations['candidate_id'].tolist())
@@ -254,6 +258,8 @@ def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run
     assert (f'{trust["rejected_evaluations"]} evaluation(s) ignored by the optimizer'
             in report.stdout), report.stdout + report.stderr
     assert f'{ignored} RunInfo/Candidate message(s) ignored' in report.stdout
+    assert (f'{FORGED_SUMMARIES} GenerationSummary message(s) in the bag failed their '
+            'signature check') in report.stdout
     # the forgeries are in the bag, but the analysis takes what the optimizer told
     assert 'untold (answers the summaries contradict)' in report.stdout
     assert f'fitness {result["fitness"]:.4g}' in report.stdout.split('best design:')[1]

@@ -23,7 +23,7 @@ from hand_codesign.ros.conversions import evaluation_message
 from hand_codesign.ros.conversions import rejection_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.keys import evaluator_credential
-from hand_codesign.ros.keys import sign_evaluation
+from hand_codesign.ros.keys import sign_evaluation, sign_status
 from hand_codesign.ros.lifeline import watch_optimizer
 from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.node_main import take_arrived
@@ -129,11 +129,11 @@ class EvaluatorNode(Node):
         # announced once the optimizer and the recorder match, the bag gets all its evaluations
         if self.evaluations.get_subscription_count() < self.settings['subscribers_expected']:
             return
-        self.status.publish(EvaluatorStatus(
+        self.status.publish(sign_status(self.key, EvaluatorStatus(
             evaluator_id=self.evaluator_id, run_id=self.settings['run_id'],
             host=socket.gethostname(), pid=os.getpid(), capacity=self.settings['capacity'],
             load=len(self.work), evaluations_done=self.done, rejected_messages=self.inbox.rejected,
-            steps_per_second=float(self.steps_per_second), stamp=stamp_now(self)))
+            steps_per_second=float(self.steps_per_second), stamp=stamp_now(self))))
 
 
 def farewell(node):

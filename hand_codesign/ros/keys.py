@@ -21,6 +21,8 @@ from hand_codesign.core.signing import run_digest
 from hand_codesign.core.signing import RunKeys
 from hand_codesign.core.signing import SECRET_VARIABLE
 from hand_codesign.core.signing import SigningError
+from hand_codesign.core.signing import SummaryKey
+from hand_codesign_msgs.msg import EvaluatorStatus
 
 
 def _bytes(signature):
@@ -28,10 +30,16 @@ def _bytes(signature):
 
 
 class OptimizerSigner:
-    """Sign the optimizer's RunInfo and Candidates; check Evaluations (all pass if unsigned)."""
+    """
+    Sign the optimizer's messages, check those of its evaluators.
+
+    Signed: RunInfo, Candidates, GenerationSummaries; checked: Evaluations and EvaluatorStatus
+    heartbeats (all pass in an unsigned run).
+    """
 
     def __init__(self, keys):
         self.keys = keys
+        self.summary_key = SummaryKey() if keys is not None else None
         self.digest = b''
         self.note = ('' if keys is not None else
                      '; UNSIGNED run (no run secret): any answer on the domain is taken')
@@ -44,6 +52,7 @@ class OptimizerSigner:
     def run_info(self, message):
         """Return the RunInfo signed; its digest is what the candidates' signatures cover."""
         if self.keys is not None:
+            message.summary_key = _bytes(self.summary_key.public)
             message.signature = _bytes(self.keys.sign_run_info(message))
             self.digest = run_digest(message)
         return message
@@ -53,8 +62,18 @@ class OptimizerSigner:
             message.signature = _bytes(self.keys.sign_candidate(message, self.digest))
         return message
 
-    def valid(self, evaluation):
-        return self.keys is None or self.keys.evaluation_valid(evaluation)
+    def summary(self, message):
+        if self.keys is not None:
+            message.signature = _bytes(self.summary_key.sign(message))
+        return message
+
+    def valid(self, message):
+        """Return whether an Evaluation or an EvaluatorStatus is signed by its evaluator."""
+        if self.keys is None:
+            return True
+        if isinstance(message, EvaluatorStatus):
+            return self.keys.status_valid(message)
+        return self.keys.evaluation_valid(message)
 
 
 def evaluator_credential(settings):
@@ -100,4 +119,11 @@ def sign_evaluation(credential, message):
     """Return the Evaluation signed with the evaluator's key (unchanged when unsigned)."""
     if credential is not None:
         message.signature = _bytes(credential.sign_evaluation(message))
+    return message
+
+
+def sign_status(credential, message):
+    """Return the EvaluatorStatus signed with the evaluator's key (unchanged when unsigned)."""
+    if credential is not None:
+        message.signature = _bytes(credential.sign_status(message))
     return message

@@ -46,10 +46,8 @@ PARAMETERS = {
     'audit_fraction': (DEFAULT_FRACTION, 'share of answers audited (core.audits)', (0.0, 1.0)),
     'own_evaluators': ('', "roles of the run's own evaluators, a,b: see core.audits", None),
     'result_file': ('', 'write the final result as JSON here; empty: do not', None),
-    'resume_bag': ('', 'continue the interrupted run of this bag (its task, seed and budget; '
-                       'task_file and the budget parameters are then ignored)', None),
-    'start_signal': (False, 'send nothing before a line arrives on standard input (the runner '
-                            'sends it once its recorder records)', None),
+    'resume_bag': ('', 'continue the run of this bag (task, seed, budget: from the bag)', None),
+    'start_signal': (False, 'send nothing before a line on stdin (the recorder records)', None),
 }
 
 
@@ -109,7 +107,8 @@ class OptimizerNode(Node):
             self.tick()
 
     def on_status(self, message):
-        self.run.heard_from(message.evaluator_id, message.capacity, message.run_id)
+        if self.signer.valid(message):  # no one speaks for an evaluator or invents one
+            self.run.heard_from(message.evaluator_id, message.capacity, message.run_id)
         self.start_if_ready()
 
     def on_evaluation(self, message):
@@ -128,7 +127,8 @@ class OptimizerNode(Node):
             attempt, world_states, design)))
 
     def send_summary(self, summary):
-        self.publish(topics.GENERATION_SUMMARY, summary_message(self.run.run_id, summary))
+        message = summary_message(self.run.run_id, summary)
+        self.publish(topics.GENERATION_SUMMARY, self.signer.summary(message))
         self.publish(topics.BEST_DESIGN, markers_message(summary['best_design'], stamp_now(self)))
 
     def log(self, text, level='info'):  # 2 call sites: rclpy ties a severity to each
