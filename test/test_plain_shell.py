@@ -3,17 +3,21 @@ Every verb called as the README says, from a plain shell: no variable that `make
 
 One tiny run (Task 5, 2 evaluators, 2 generations of 4 candidates on 2 worlds) is made with
 `.venv/bin/hand-codesign run` in an environment that holds PATH and HOME only; every other
-verb then reads its bag the same way, and replay also after `source .venv/bin/activate`.
+verb then reads its bag the same way, and replay also after `source .venv/bin/activate`; a
+node started by hand (the recorder) works the same way.
 """
 
 import json
 import os
 import pathlib
 import shlex
+import signal
 import subprocess
 import sys
 
+from hand_codesign.core.contract import RECORDER_READY
 import pytest
+from test_system import free_domain
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK = ROOT / 'config' / 'tasks' / 'task5.yaml'
@@ -76,3 +80,25 @@ def test_bag_verbs(plain_bag, tmp_path):
 def test_verbs_without_a_bag():
     assert 'goals' in plain('check', TASK)
     assert 'all' in plain('reproduce', '--list').split()
+
+
+def test_a_node_started_by_hand(tmp_path):
+    # the recorder looks its message types up through ament_index_python
+    bag = tmp_path / 'by-hand'
+    recorder = subprocess.Popen(
+        [str(COMMAND.parent / 'recorder'), '--ros-args', '-p', f'bag_path:={bag}'],
+        env=dict(PLAIN, ROS_DOMAIN_ID=str(free_domain())), stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT, text=True)
+    try:
+        lines = []
+        for line in recorder.stdout:
+            lines.append(line)
+            if RECORDER_READY in line:
+                break
+        recorder.send_signal(signal.SIGINT)
+        output = ''.join(lines) + recorder.communicate(timeout=60)[0]
+    finally:
+        if recorder.poll() is None:
+            recorder.kill()
+    assert recorder.returncode == 0 and RECORDER_READY in output, output
+    assert 'Traceback' not in output and list(bag.glob('*.mcap')), output
