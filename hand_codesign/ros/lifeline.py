@@ -7,7 +7,8 @@ RUNNER_VARIABLE. The node then asks the kernel to send it SIGTERM when the runne
 runner starts every node from its main thread, whose end is the process's end; the ROS wheels'
 bootstrapper re-executes Python with execve, which keeps the setting) and, as a second line, a
 thread watches the runner's pid. SIGTERM ends a node as Ctrl-C does (rclpy's handler), so a
-recorder closes its bag; a node still there GRACE seconds later kills itself.
+recorder closes its bag; a node still there GRACE seconds later kills itself. A process of
+the run that is not ours (the discovery server) gets the same signal from `dies_with_me`.
 
 An evaluator started by hand has no runner: OptimizerWatch tells it when the optimizer it
 served has left the domain for good, and it gives the run up.
@@ -23,6 +24,8 @@ RUNNER_VARIABLE = 'HAND_CODESIGN_RUNNER_PID'
 PR_SET_PDEATHSIG = 1   # <linux/prctl.h>
 WATCH_PERIOD = 0.5     # s between looks at the runner's pid
 GRACE = 10.0           # s a node has to end after SIGTERM before it kills itself
+# loaded here, not between fork and exec in a child (dies_with_me)
+_LIBC = ctypes.CDLL(None, use_errno=True)
 
 
 def runner_environment():
@@ -41,12 +44,27 @@ def follow_runner():
     if not text.isdigit():
         return None
     runner = int(text)
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    _LIBC.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
     # a runner that died before prctl: getppid() is no longer its pid, the watch ends us now
     threading.Thread(target=watch_runner, args=(runner,), daemon=True,
                      name='runner watch').start()
     return runner
+
+
+def dies_with_me():
+    """
+    Return a preexec_fn for subprocess.Popen: the child gets SIGTERM when this process dies.
+
+    Call Popen from the main thread (the signal follows the thread that forked) and before
+    other threads start (a preexec_fn is not safe beside running threads).
+    """
+    parent = os.getpid()
+
+    def arm():
+        _LIBC.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+        if os.getppid() != parent:   # the parent died before prctl: nobody will signal
+            os._exit(1)
+    return arm
 
 
 def watch_runner(runner):
