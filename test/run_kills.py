@@ -36,16 +36,17 @@ def processes_of(runner_pid):
     return found
 
 
-def kill_run(bag, after_seconds=None, after_line=None, how=signal.SIGKILL, timeout=60.0):
+def kill_run(bag, after_seconds=None, after_line=None, how=signal.SIGKILL, timeout=60.0,
+             extra=()):
     """
     Start a run, signal its runner; return (every process of the run seen, the output).
 
     The signal `how` goes after_seconds s after the run's first process started, or once a
-    line of the runner's output contains after_line.
+    line of the runner's output contains after_line. extra: more arguments of `run`.
     """
     runner = subprocess.Popen(
         [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
-         '--evaluators', '2', '--bag', str(bag), *BUDGET],
+         '--evaluators', '2', '--bag', str(bag), *BUDGET, *extra],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines = []
     threading.Thread(target=lambda: lines.extend(runner.stdout), daemon=True).start()

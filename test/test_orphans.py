@@ -11,6 +11,7 @@ optimizer_timeout seconds.
 import os
 import re
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -38,6 +39,21 @@ def test_no_process_outlives_a_killed_runner(tmp_path, after_seconds, after_line
     assert seen, output
     if after_line is not None:
         assert len(seen) >= 4, output   # recorder, two evaluators, optimizer
+    left = survivors(seen, GRACE)
+    assert not left, describe(left)
+
+
+def free_udp_port():
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(('', 0))
+        return probe.getsockname()[1]
+
+
+def test_the_discovery_server_ends_with_its_runner(tmp_path):
+    seen, output = kill_run(tmp_path / 'run', after_line='generation 2/',
+                            extra=['--discovery-server', str(free_udp_port())])
+    assert 'discovery server on port' in output
+    assert len(seen) >= 5, output   # recorder, two evaluators, optimizer, discovery server
     left = survivors(seen, GRACE)
     assert not left, describe(left)
 
