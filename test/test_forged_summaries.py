@@ -18,8 +18,10 @@ from analysis_run import run_cli
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.resume import resume_point
 from hand_codesign.core.signing import summary_valid
+from hand_codesign.core.signing import SummaryKey
 from hand_codesign.ros import topics
 from hand_codesign_msgs.msg import GenerationSummary
+from hand_codesign_msgs.msg import RunInfo
 import numpy as np
 from rclpy.serialization import deserialize_message
 from test_resume import interrupted_copy
@@ -80,6 +82,25 @@ def test_forged_summaries_change_no_reading_and_are_counted(real_run, tmp_path):
     assert (tmp_path / 'report' / 'generations.csv').read_text() == (
         tmp_path / 'clean_report' / 'generations.csv').read_text()
     assert 'forged' in text and clean_report.returncode == 0
+
+
+def test_a_forged_run_info_recorded_first_unlocks_nothing(real_run, tmp_path):
+    # the recorder heard the forger's copies of the RunInfo (made after the run's own, without
+    # a key or with the forger's) before the run's own
+    (run_info,) = [deserialize_message(data, RunInfo) for topic, _, _, data
+                   in raw_messages(real_run.mcap) if topic == topics.RUN_INFO]
+    log_time, publish_time = next((log_time, publish_time) for topic, log_time, publish_time, _
+                                  in raw_messages(real_run.mcap) if topic == topics.RUN_INFO)
+    keyless, foreign_key = copy.deepcopy(run_info), copy.deepcopy(run_info)
+    keyless.summary_key = []
+    foreign_key.summary_key = list(SummaryKey().public)
+    first = [(topics.RUN_INFO, copy_, log_time - 2 + number, publish_time + 1000 + number)
+             for number, copy_ in enumerate((keyless, foreign_key))]
+    forged_bag = copy_bag(real_run.mcap, tmp_path / 'forged.mcap', extra=forgeries(real_run),
+                          first=first)
+    record = read_run(forged_bag)
+    assert record.rejected_summaries == FORGED + 1
+    assert len(record.generation_summaries) == len(read_run(real_run.bag).generation_summaries)
 
 
 def test_forged_summaries_change_no_resume(real_run, tmp_path):

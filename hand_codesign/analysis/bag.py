@@ -16,8 +16,8 @@ big-endian CDR), and gathered per topic into column tables of numpy arrays.
 
 GenerationSummaries are what a reader trusts most (resume rebuilds the search from them), so
 in a signed run each carries an Ed25519 signature under the key its run announced in its first
-RunInfo (core.signing); a summary whose signature fails was forged on the run's domain, is left
-out, and counted in ``RunRecord.rejected_summaries`` with a warning.
+RunInfo (core.signing; `_summary_keys`); a summary whose signature fails was forged on the
+run's domain, is left out, and counted in ``RunRecord.rejected_summaries`` with a warning.
 """
 
 import collections
@@ -633,15 +633,22 @@ def read_run(path, run_id=None):
 
 
 def _summary_keys(decoded):
-    """Return {run id: RunInfo.summary_key} of each run's first RunInfo (by log time)."""
+    """
+    Return {run id: RunInfo.summary_key} of each run's first RunInfo that has a key.
+
+    First: by the time its publisher wrote it (the recorder may hear a forger's copy, made
+    after the run's own, before the run's own), then by log time. A RunInfo without a key
+    cannot make a signed run's summaries unchecked: an optimizer with a key always sends one.
+    """
     first = {}
-    for type_name, (names, values, log_times, _) in decoded:
+    for type_name, (names, values, log_times, publish_times) in decoded:
         if type_name != RUN_INFO_TYPE or 'summary_key' not in names:
             continue   # a bag of a run before summaries were signed
         run_at, key_at = names.index('run_id'), names.index('summary_key')
-        for value, log_time in zip(values, log_times):
-            if value[run_at] not in first or log_time < first[value[run_at]][0]:
-                first[value[run_at]] = (log_time, bytes(value[key_at]))
+        for value, log_time, publish_time in zip(values, log_times, publish_times):
+            run, key = value[run_at], bytes(value[key_at])
+            if key and (run not in first or (publish_time, log_time) < first[run][0]):
+                first[run] = ((publish_time, log_time), key)
     return {run: key for run, (_, key) in first.items()}
 
 
