@@ -237,7 +237,10 @@ def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run
     assert 'foreign-run' in record.run_ids
     # the forged summaries are in the bag, left out by every reader, and counted
     assert record.rejected_summaries == FORGED_SUMMARIES
+    # its heartbeats (a phantom evaluator's, and evaluator-0's asking for 100 candidates) are
+    # in the bag too, but the optimizer heard neither: nothing went to the phantom
     assert 'phantom' in set(record.evaluator_status['evaluator_id'])
+    assert 'phantom' not in set(record.candidates['evaluator_id'])
     ignored = trust_counts(record)['rejected_by_evaluators']
     assert ignored >= 2 * 3 + 2, 'the unsigned candidates and RunInfo were not all ignored'
     answered = set(record.evaluations['candidate_id'].tolist())
