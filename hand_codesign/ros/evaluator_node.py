@@ -1,12 +1,12 @@
 """
 The evaluator node: evaluates candidates with hand_codesign.core.evaluate and answers them.
 
-Which candidates it takes and what it evaluates are core.evaluation_jobs' rules; it answers each
-candidate taken with an Evaluation or a rejection with the reason, never a crash; with a key
-(ros.keys) it takes only signed messages and signs its answers. One thread does it all: between
-candidates and worlds (every POLL_PERIOD at most) it takes what arrived and beats the heartbeat (a
-MultiThreadedExecutor: 25 % slower). It ends with its runner, or optimizer_timeout s after the
-optimizer of its run left (ros.lifeline).
+Which candidates it takes and what it evaluates are core.evaluation_jobs' rules; it answers
+each candidate taken with an Evaluation or a rejection with the reason, never a crash; with a
+key (ros.keys) it takes only signed messages and signs its answers. One thread does it all:
+between candidates and worlds (every POLL_PERIOD at most) it takes what arrived and beats the
+heartbeat (a MultiThreadedExecutor was 25 % slower). It ends with its runner, or
+optimizer_timeout s after the optimizer of its run left (ros.lifeline).
 """
 
 import collections
@@ -42,7 +42,7 @@ PARAMETERS = {
     'capacity': (2, 'candidates it asks to have queued at once', (1, 1000)),
     'heartbeat_period': (0.5, 'seconds between status messages', (0.01, 60.0)),
     'subscribers_expected': (1, 'evaluation subscribers to wait for before announcing', (0, 100)),
-    'optimizer_timeout': (60.0, 's it serves a run whose optimizer left; 0: ever', (0.0, 1e6)),
+    'optimizer_timeout': (60.0, 's it waits for a run whose optimizer left; 0: forever', (0.0, 1e6)),
 }
 IDLE_WAIT = 0.1  # s an idle evaluator waits for something to arrive
 POLL_PERIOD = 0.05  # s between looks at the executor while evaluating (a Task 5 world: 5 ms)
