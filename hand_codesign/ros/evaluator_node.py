@@ -42,7 +42,7 @@ PARAMETERS = {
     'capacity': (2, 'candidates it asks to have queued at once', (1, 1000)),
     'heartbeat_period': (0.5, 'seconds between status messages', (0.01, 60.0)),
     'subscribers_expected': (1, 'evaluation subscribers to wait for before announcing', (0, 100)),
-    'optimizer_timeout': (60.0, 's it waits for a run whose optimizer left; 0: forever', (0.0, 1e6)),
+    'optimizer_timeout': (60.0, 's a run may lack its optimizer; 0: no limit', (0.0, 1e6)),
 }
 IDLE_WAIT = 0.1  # s an idle evaluator waits for something to arrive
 POLL_PERIOD = 0.05  # s between looks at the executor while evaluating (a Task 5 world: 5 ms)
