@@ -97,16 +97,21 @@ def until_evaluation_of(candidate_id):
     return keep
 
 
-def copy_bag(source_mcap, destination, keep=None, edit=None):
+def copy_bag(source_mcap, destination, keep=None, edit=None, extra=(), first=()):
     """
     Write a copy of a bag file to destination (.mcap) with BagWriter, as the recorder would.
 
     keep(topic, log_time, message) -> bool drops messages; edit(topic, message) changes the
-    decoded rclpy message in place before it is written.
+    decoded rclpy message in place before it is written; extra: (topic, rclpy message) pairs
+    written after the copied messages, each a millisecond after the last; first: (topic, rclpy
+    message, log time, publish time) written before them.
     """
     writer = BagWriter(str(destination))
     for topic, message_class in topics.RECORDED_MESSAGE_TYPES.items():
         writer.add_topic('/' + topic, topics.type_name(message_class), [topics.QOS[topic]])
+    for topic, message, log_time, publish_time in first:
+        writer.write('/' + topic, serialize_message(message), log_time=log_time,
+                     publish_time=publish_time)
     for topic, log_time, publish_time, data in raw_messages(source_mcap):
         message = deserialize_message(data, topics.RECORDED_MESSAGE_TYPES[topic])
         if keep is not None and not keep(topic, log_time, message):
@@ -114,5 +119,9 @@ def copy_bag(source_mcap, destination, keep=None, edit=None):
         if edit is not None and edit(topic, message):
             data = serialize_message(message)
         writer.write('/' + topic, data, log_time=log_time, publish_time=publish_time)
+    for topic, message in extra:
+        log_time += 1_000_000
+        writer.write('/' + topic, serialize_message(message), log_time=log_time,
+                     publish_time=log_time)
     writer.close()
     return pathlib.Path(destination)

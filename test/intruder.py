@@ -6,8 +6,10 @@ RunInfo and a Candidate of a foreign run, an unsigned RunInfo of the run itself 
 another task, unsigned Candidates of the run (a genome of the wrong length, NaN values, an
 impossible structure) addressed to the run's evaluators, and an Evaluation of the foreign run.
 Then it forges: it answers every Candidate at once with objectives of 0 in the name of the
-evaluator the optimizer addressed, until the run's final GenerationSummary. It prints how
-many evaluations it forged.
+evaluator the optimizer addressed, publishes FORGED_SUMMARIES GenerationSummaries of the run
+claiming objectives of 0, and beats heartbeats for an evaluator that does not exist and in
+the name of one that does, asking for much work, until the run's final GenerationSummary. It
+prints how many evaluations it forged.
 """
 
 import sys
@@ -16,10 +18,12 @@ import time
 from hand_codesign.ros import topics
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
+from hand_codesign_msgs.msg import EvaluatorStatus
 from hand_codesign_msgs.msg import GenerationSummary
 from hand_codesign_msgs.msg import RunInfo
 import rclpy
 
+FORGED_SUMMARIES = 6
 MALFORMED = {10**9: ([0.5], [2, 2]), 10**9 + 1: ([float('nan')] * 24, [2, 2]),
              10**9 + 2: ([0.5] * 24, [0, 7])}
 
@@ -34,7 +38,8 @@ def main():
                              topics.QOS[topics.GENERATION_SUMMARY])
     publishers = {name: node.create_publisher(topics.MESSAGE_TYPES[name], name,
                                               topics.QOS[name])
-                  for name in (topics.RUN_INFO, topics.CANDIDATES, topics.EVALUATIONS)}
+                  for name in (topics.RUN_INFO, topics.CANDIDATES, topics.EVALUATIONS,
+                               topics.GENERATION_SUMMARY, topics.EVALUATOR_STATUS)}
     forged, early = [], []
 
     def forge(candidate):
@@ -73,8 +78,17 @@ def main():
                 structure=structure, evaluator_id=evaluator_id))
     publishers[topics.EVALUATIONS].publish(Evaluation(
         run_id='foreign-run', candidate_id=0, objectives=[0.0], evaluator_id='intruder'))
+    for generation in range(100, 100 + FORGED_SUMMARIES):
+        publishers[topics.GENERATION_SUMMARY].publish(GenerationSummary(
+            run_id=run.run_id, generation=generation, objective_names=run.objective_names,
+            best=[0.0] * len(run.objective_names), best_fitness=0.0, wall_time=1.0,
+            best_objectives=[0.0] * len(run.objective_names), signature=[0] * 64))
     deadline = time.monotonic() + 180
     while not finals and time.monotonic() < deadline:
+        for evaluator_id in ('phantom', 'evaluator-0'):   # nobody, and somebody else
+            publishers[topics.EVALUATOR_STATUS].publish(EvaluatorStatus(
+                evaluator_id=evaluator_id, run_id=run.run_id, capacity=100, load=0,
+                signature=[0] * 32))
         rclpy.spin_once(node, timeout_sec=0.1)
     print(f'forged {len(forged)} evaluations')
     node.destroy_node()

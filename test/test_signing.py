@@ -12,12 +12,16 @@ from hand_codesign.core.signing import Credential
 from hand_codesign.core.signing import RunKeys
 from hand_codesign.core.signing import SIGNED_FIELDS
 from hand_codesign.core.signing import SigningError
+from hand_codesign.core.signing import summary_valid
 from hand_codesign.core.signing import UNSIGNED_FIELDS
 from hand_codesign.ros.keys import evaluator_credential
 from hand_codesign.ros.keys import OptimizerSigner
 from hand_codesign.ros.keys import sign_evaluation
+from hand_codesign.ros.keys import sign_status
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
+from hand_codesign_msgs.msg import EvaluatorStatus
+from hand_codesign_msgs.msg import GenerationSummary
 from hand_codesign_msgs.msg import RunInfo
 import pytest
 
@@ -38,7 +42,8 @@ def msg_fields(name):
     return fields
 
 
-@pytest.mark.parametrize('name', ['RunInfo', 'Candidate', 'Evaluation'])
+@pytest.mark.parametrize('name', ['RunInfo', 'Candidate', 'Evaluation', 'GenerationSummary',
+                                  'EvaluatorStatus'])
 def test_every_field_but_signature_and_stamp_is_signed_in_msg_order(name):
     # a field added to the message and forgotten here would travel unsigned
     expected = []
@@ -61,9 +66,13 @@ def test_the_signed_bytes_are_those_the_msg_comment_spells():
                         structure=[2, 1], world_states=0, horizon=0.5, genome=[0.25],
                         genome_names=['g'])
     run = RunInfo(run_id='r', task_name='t')
+    signer = OptimizerSigner(RunKeys(SECRET))
+    signer.run_info(run)   # announces its summary key (drawn afresh), then signs
+    summary_key = bytes(run.summary_key)
     run_bytes = (string('hand_codesign_msgs/msg/RunInfo') + string('r') + string('t')
                  + string('') + struct.pack('<Q', 0) + string('') + struct.pack('<QQQ', 0, 0, 0)
-                 + struct.pack('<I', 0) * 2 + string(''))
+                 + struct.pack('<I', 0) * 2 + string('')
+                 + struct.pack('<I', 32) + b''.join(struct.pack('<Q', b) for b in summary_key))
     candidate_bytes = (
         string('hand_codesign_msgs/msg/Candidate') + string('r') + struct.pack('<QQ', 1, 2)
         + string('é') + struct.pack('<Q', 3) + struct.pack('<IQQ', 2, 2, 1)
@@ -76,8 +85,6 @@ def test_the_signed_bytes_are_those_the_msg_comment_spells():
     key = hmac.new(SECRET, b'evaluator\x00' + 'é'.encode(), hashlib.sha256).digest()
     expected = hmac.new(key, candidate_bytes + hashlib.sha256(run_bytes).digest(),
                         hashlib.sha256).digest()
-    signer = OptimizerSigner(RunKeys(SECRET))
-    signer.run_info(run)
     assert bytes(signer.candidate(message).signature) == expected
     assert bytes(run.signature) == hmac.new(
         hmac.new(SECRET, b'run_info', hashlib.sha256).digest(), run_bytes,
@@ -127,6 +134,32 @@ def test_an_evaluation_holds_only_under_the_key_of_the_evaluator_it_names():
     assert OptimizerSigner(None).valid(forged), 'an unsigned run takes every answer'
 
 
+def test_a_heartbeat_holds_only_under_the_key_of_the_evaluator_it_names():
+    keys = RunKeys(SECRET)
+    status = sign_status(keys.credential('evaluator-0'), EvaluatorStatus(
+        evaluator_id='evaluator-0', run_id='run-1', capacity=2, load=1))
+    assert OptimizerSigner(keys).valid(status)
+    status.capacity = 1000                      # a copy that asks for more work
+    assert not OptimizerSigner(keys).valid(status)
+    invented = EvaluatorStatus(evaluator_id='phantom', run_id='run-1', capacity=2)
+    assert not OptimizerSigner(keys).valid(invented)
+    assert OptimizerSigner(None).valid(invented), 'an unsigned run hears every evaluator'
+
+
+def test_a_summary_holds_only_under_the_key_its_run_announced():
+    signer, run = signed_run()
+    summary = signer.summary(GenerationSummary(
+        run_id='run-1', generation=2, structure=[2, 2], objective_names=['p'], best=[0.5],
+        told_ids=[4, 5], told_objectives=[0.5, 0.75], best_fitness=0.5))
+    assert len(summary.signature) == 64 and summary_valid(run.summary_key, summary)
+    summary.told_objectives = [0.0, 0.0]
+    assert not summary_valid(run.summary_key, summary)
+    summary.told_objectives = [0.5, 0.75]
+    other, _ = signed_run()                      # another run's key pair
+    assert not summary_valid(other.summary_key.public, summary)
+    assert OptimizerSigner(None).summary(summary) is summary
+
+
 def test_the_inbox_of_a_keyed_evaluator_takes_only_signed_messages():
     signer, run = signed_run()
     credential = RunKeys(SECRET).credential('evaluator-0')
@@ -152,6 +185,7 @@ def test_key_files_round_trip_and_bad_ones_say_what_is_wrong(tmp_path, monkeypat
     credential = RunKeys(SECRET).credential('host-b')
     path = tmp_path / 'host-b.key'
     path.write_text(credential.text())
+    path.chmod(0o600)
     monkeypatch.delenv('HAND_CODESIGN_EVALUATOR_KEY', raising=False)
     read, evaluator_id = evaluator_credential({'key_file': str(path), 'evaluator_id': ''})
     assert evaluator_id == 'host-b' and read.key == credential.key

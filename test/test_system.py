@@ -24,6 +24,7 @@ from hand_codesign.analysis.trust import trust_counts
 from hand_codesign.core.signing import new_secret
 from hand_codesign.core.signing import RunKeys
 from hand_codesign.ros.runner import claimed_domain
+from intruder import FORGED_SUMMARIES
 import numpy as np
 import psutil
 import pytest
@@ -235,6 +236,12 @@ def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run
     assert 0 < trust['rejected_evaluations'] <= forged
     record = read_run(disturbed, run_id=result['run_id'])
     assert 'foreign-run' in record.run_ids
+    # the forged summaries are in the bag, left out by every reader, and counted
+    assert record.rejected_summaries == FORGED_SUMMARIES
+    # its heartbeats (a phantom evaluator's, and evaluator-0's asking for 100 candidates) are
+    # in the bag too, but the optimizer heard neither: nothing went to the phantom
+    assert 'phantom' in set(record.evaluator_status['evaluator_id'])
+    assert 'phantom' not in set(record.candidates['evaluator_id'])
     ignored = trust_counts(record)['rejected_by_evaluators']
     assert ignored >= 2 * 3 + 2, 'the unsigned candidates and RunInfo were not all ignored'
     answered = set(record.evaluations['candidate_id'].tolist())
@@ -255,6 +262,8 @@ def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run
     assert (f'{trust["rejected_evaluations"]} evaluation(s) ignored by the optimizer'
             in report.stdout), report.stdout + report.stderr
     assert f'{ignored} RunInfo/Candidate message(s) ignored' in report.stdout
+    assert (f'{FORGED_SUMMARIES} GenerationSummary message(s) in the bag failed their '
+            'signature check') in report.stdout
     # the forgeries are in the bag, but the analysis takes what the optimizer told
     assert 'untold (answers the summaries contradict)' in report.stdout
     assert f'fitness {result["fitness"]:.4g}' in report.stdout.split('best design:')[1]
@@ -266,6 +275,7 @@ def test_an_evaluator_with_its_key_that_lies_is_caught(one_evaluator_run, tmp_pa
     keys = RunKeys(secret)
     key_file = tmp_path / 'liar.key'
     key_file.write_text(keys.credential('liar').text())
+    key_file.chmod(0o600)
     with claimed_domain(None) as domain_id:
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain_id))
         lied = tmp_path / 'lied'

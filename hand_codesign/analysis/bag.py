@@ -13,6 +13,11 @@ Messages are decoded with decoders compiled from the schema text stored in the b
 (``hand_codesign.analysis.cdr``, four to ten times faster than the libraries'), falling back
 to the rosbags typestore built from the same schema for anything those do not handle (e.g.
 big-endian CDR), and gathered per topic into column tables of numpy arrays.
+
+GenerationSummaries are what a reader trusts most (resume rebuilds the search from them), so
+in a signed run each carries an Ed25519 signature under the key its run announced in its first
+RunInfo (core.signing; `_summary_keys`); a summary whose signature fails was forged on the
+run's domain, is left out, and counted in ``RunRecord.rejected_summaries`` with a warning.
 """
 
 import collections
@@ -29,6 +34,7 @@ from hand_codesign.core.contract import LOOP_TYPES
 from hand_codesign.core.contract import MESSAGES_PACKAGE
 from hand_codesign.core.contract import RUN_INFO_TYPE
 from hand_codesign.core.runs import run_task
+from hand_codesign.core.signing import summary_valid
 from mcap.exceptions import EndOfFile
 from mcap.exceptions import McapError
 from mcap.records import Channel
@@ -157,6 +163,7 @@ class RunRecord:
     end_time: int
     truncated: bool = False
     warnings: list = dataclasses.field(default_factory=list)
+    rejected_summaries: int = 0  # GenerationSummaries of the run left out: signature fails
 
     @property
     def warning(self):
@@ -569,6 +576,7 @@ def read_run(path, run_id=None):
                                              + scan.counts.get(channel_id, 0))
 
     parts = collections.defaultdict(list)
+    decoded = []   # (type name, (field names, values, log times, publish times))
     for scan, channel_id, channel in loop_channels:
         if channel.schema_name not in LOOP_TYPES:
             continue
@@ -578,11 +586,17 @@ def read_run(path, run_id=None):
                             'cdr; skipped')
             continue
         rows = scan.messages.get(channel_id, [])
-        table = _table(*_decode_channel(channel, rows, warnings))
-        parts[channel.schema_name].append(_with_later_fields(channel.schema_name, table))
+        decoded.append((channel.schema_name, _decode_channel(channel, rows, warnings)))
+    forged = _drop_forged_summaries(decoded)
+    for name, columns in decoded:
+        parts[name].append(_with_later_fields(name, _table(*columns)))
     tables = {name: _concatenate(parts[name]) for name in LOOP_TYPES}
 
     chosen, all_runs = _choose_run(run_id, tables, warnings)
+    if forged[chosen]:
+        warnings.append(f'left out {forged[chosen]} GenerationSummary message(s) of run '
+                        f"{chosen!r} whose signature fails or repeats: not its optimizer's "
+                        "(forged on the run's domain?)")
     for name in LOOP_TYPES:
         table = tables[name]
         if not len(table) or 'run_id' not in table:
@@ -614,4 +628,67 @@ def read_run(path, run_id=None):
         end_time=int(times.max()) if len(times) else 0,
         truncated=truncated,
         warnings=warnings,
+        rejected_summaries=forged[chosen],
     )
+
+
+def _summary_keys(decoded):
+    """
+    Return {run id: RunInfo.summary_key} of each run's first RunInfo that has a key.
+
+    First: by the time its publisher wrote it (the recorder may hear a forger's copy, made
+    after the run's own, before the run's own), then by log time. A RunInfo without a key
+    cannot make a signed run's summaries unchecked: an optimizer with a key always sends one.
+    """
+    first = {}
+    for type_name, (names, values, log_times, publish_times) in decoded:
+        if type_name != RUN_INFO_TYPE or 'summary_key' not in names:
+            continue   # a bag of a run before summaries were signed
+        run_at, key_at = names.index('run_id'), names.index('summary_key')
+        for value, log_time, publish_time in zip(values, log_times, publish_times):
+            run, key = value[run_at], bytes(value[key_at])
+            if key and (run not in first or (publish_time, log_time) < first[run][0]):
+                first[run] = ((publish_time, log_time), key)
+    return {run: key for run, (_, key) in first.items()}
+
+
+def _drop_forged_summaries(decoded):
+    """
+    Leave out the forged GenerationSummaries of decoded; return their count per run id.
+
+    Forged: its signature fails or repeats (a genuine summary published again). A run whose
+    first RunInfo has an empty summary_key (unsigned), or none, keeps all its summaries:
+    nothing can tell them apart.
+    """
+    keys = _summary_keys(decoded)
+    forged = collections.Counter()
+    seen = set()
+    for index, (type_name, (names, values, log_times, publish_times)) in enumerate(decoded):
+        if type_name != GENERATION_SUMMARY_TYPE or not values:
+            continue
+        run_at = names.index('run_id')
+        keep = [_genuine(keys.get(value[run_at], b''), names, value, seen) for value in values]
+        for value, kept in zip(values, keep):
+            forged[value[run_at]] += not kept
+        columns = ([item for item, kept in zip(column, keep) if kept]
+                   for column in (values, log_times, publish_times))
+        decoded[index] = (type_name, (names, *columns))
+    return forged
+
+
+def _genuine(key, names, value, seen):
+    """
+    Return whether a decoded GenerationSummary is signed under key (b'': unsigned run).
+
+    seen: the signatures taken so far; a repeated one is refused, a new one added.
+    """
+    if not key:
+        return True
+    if 'signature' not in names:
+        return False
+    summary = dict(zip(names, value))
+    signature = bytes(summary['signature'])
+    if signature in seen or not summary_valid(key, summary):
+        return False
+    seen.add(signature)
+    return True

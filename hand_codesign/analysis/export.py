@@ -38,6 +38,7 @@ from hand_codesign.core.runs import run_task
 from hand_codesign.core.task import parse_design
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
+from hand_codesign.outputs import staged
 import numpy as np
 import yaml
 
@@ -55,7 +56,8 @@ def export_command(arguments):
     design = records.recorded_design(
         record, records.best_candidate_id(record) if chosen is None else chosen)
     out = pathlib.Path(arguments.out)
-    paths = export_design(record, design, out)
+    with staged(out) as folder:
+        paths = [out / path.name for path in export_design(record, design, folder)]
     print(f'exported candidate {design.candidate_id} of generation {design.generation} '
           f'(structure {list(design.structure)}): {paths[0]}, {paths[1]}')
     exported = load_export(out)

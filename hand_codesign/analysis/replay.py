@@ -31,6 +31,7 @@ from hand_codesign.core.sim import Simulator
 from hand_codesign.core.worlds import object_state
 from hand_codesign.core.worlds import world_states
 from hand_codesign.errors import UserError
+from hand_codesign.outputs import staged
 import numpy as np
 
 FRAMES_PER_SECOND = 25
@@ -260,10 +261,10 @@ def render_gif(path, task, design, world):
     """Write the animated GIF of one world to path; return the number of frames."""
     import imageio.v3 as imageio
     frames = render_frames(task, design, world)
-    path.parent.mkdir(parents=True, exist_ok=True)
     try:
-        imageio.imwrite(path, np.stack(frames), extension='.gif',
-                        duration=1000.0 / FRAMES_PER_SECOND, loop=0)
+        with staged(path) as temporary:
+            imageio.imwrite(temporary, np.stack(frames), extension='.gif',
+                            duration=1000.0 / FRAMES_PER_SECOND, loop=0)
     except OSError as error:
         raise UserError(f'--gif {path}: cannot write: {error}') from None
     return len(frames)

@@ -37,6 +37,7 @@ from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.task import TaskError
 from hand_codesign.core.worlds import world_states
 from hand_codesign.errors import UserError
+from hand_codesign.outputs import staged
 from hand_codesign.version import version_text
 import numpy as np
 
@@ -50,10 +51,11 @@ def analyze_command(arguments):
     record = records.open_run(arguments.bag)
     out = pathlib.Path(arguments.out) if arguments.out else default_report_dir(record.path)
     report = Report(record)
-    files = report.write(out)
-    print(report.summary_text())
-    if getattr(arguments, 'unseen', 0):
-        files += write_unseen(record.path, out, arguments.unseen)
+    with staged(out) as folder:
+        files = report.write(folder)
+        print(report.summary_text())
+        if getattr(arguments, 'unseen', 0):
+            files += write_unseen(record.path, folder, arguments.unseen)
     print(f'report: {out} ({", ".join(sorted(path.name for path in files))})')
     return 0
 

@@ -38,6 +38,7 @@ from hand_codesign.core.worlds import grid_world_states
 from hand_codesign.core.worlds import randomized_quantities
 from hand_codesign.core.worlds import world_states
 from hand_codesign.errors import UserError
+from hand_codesign.outputs import staged
 import numpy as np
 
 PERCENTILES = (5, 25, 50, 75, 90, 95, 99)
@@ -66,7 +67,8 @@ def robustness_command(arguments):
           f'structure {list(design.structure)}) on {len(worlds)} world states ({how}) with '
           f'{workers} processes')
     report = timed_robustness(design.x, task, worlds, workers)
-    paths = write_report(out, report, f'{task.name}, candidate {design.candidate_id}')
+    with staged(out) as folder:
+        paths = write_report(folder, report, f'{task.name}, candidate {design.candidate_id}')
     print(percentile_table(report))
     print(f'collisions at the start: {int(np.sum(report.collisions))} of {report.size} '
           'worlds')
@@ -94,14 +96,17 @@ def structures_command(record, bests, samples, workers, out):
         print(f'structure {list(structure)}: evaluating its best design, candidate '
               f'{candidate_id}, on {len(worlds)} world states ({how}) with {workers} processes')
         report = timed_robustness(design.x, task, worlds, workers)
-        folder = out / ('structure_' + '_'.join(str(joints) for joints in structure))
-        write_tables(folder, report)
-        print(percentile_table(report))
         reports.append((structure, candidate_id, report))
-    summary_path = out / 'structures.csv'
-    write_structures_csv(summary_path, reports)
-    figure_path = out / 'structures.png'
-    plot_structures(figure_path, reports, f'{task.name}, {len(worlds)} world states')
+        print(percentile_table(report))
+    with staged(out) as staging:
+        for structure, _, report in reports:
+            write_tables(staging / ('structure_' + '_'.join(str(joints) for joints in structure)),
+                         report)
+        summary_path = out / 'structures.csv'
+        write_structures_csv(staging / summary_path.name, reports)
+        figure_path = out / 'structures.png'
+        plot_structures(staging / figure_path.name, reports,
+                        f'{task.name}, {len(worlds)} world states')
     print(f'robustness of {len(reports)} structures: {out} ({summary_path.name}, '
           f'{figure_path.name}, one folder per structure)')
     return 0

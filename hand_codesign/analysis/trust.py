@@ -4,8 +4,9 @@ What a run's bag says about trust: forged messages ignored, audits, quarantined 
 The optimizer counts in each GenerationSummary the evaluations it ignored for a missing or
 wrong signature, the audit evaluations (a second or third evaluator checking an answer) and
 the evaluators it quarantined; each evaluator counts in its EvaluatorStatus the RunInfos and
-Candidates it ignored. The bag holds no key, so these counts are what it can report. Bags of
-runs before signing lack these fields and report nothing here.
+Candidates it ignored. The bag holds no secret key, so these counts are what it can report,
+beside the GenerationSummaries the reader left out because their Ed25519 signature failed
+(analysis.bag). Bags of runs before signing lack these fields and report nothing here.
 """
 
 from hand_codesign.analysis import records
@@ -39,9 +40,12 @@ def trust_counts(record):
 
 def trust_facts(record):
     """Return [(label, text)] for the report's facts: signatures, audits, quarantines."""
+    forged = ([('forged summaries', f'{record.rejected_summaries} GenerationSummary '
+                "message(s) in the bag failed their signature check (forged on the run's "
+                'domain?) and were left out')] if record.rejected_summaries else [])
     counts = trust_counts(record)
     if counts is None:
-        return []
+        return forged
     told = counts['evaluations_told']
     share = f' ({counts["audit_evaluations"] / told:.0%} of the {told} told)' if told else ''
     return [
@@ -53,4 +57,4 @@ def trust_facts(record):
                    f'progress; {counts["reevaluations"]} answer(s) of quarantined evaluators '
                    'evaluated again'),
         ('quarantined', ', '.join(counts['quarantined']) or 'none'),
-    ]
+    ] + forged

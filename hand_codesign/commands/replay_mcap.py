@@ -28,6 +28,7 @@ from hand_codesign.core.geometry import hand_shapes
 from hand_codesign.core.geometry import object_shapes
 from hand_codesign.core.worlds import object_state
 from hand_codesign.errors import UserError
+from hand_codesign.outputs import staged
 from hand_codesign.ros.conversions import markers_message
 from hand_codesign.ros.mcap_writer import BagWriteError
 from hand_codesign.ros.mcap_writer import BagWriter
@@ -48,7 +49,7 @@ def write_rollout_mcap(path, task, design, world):
     ghosts = [ghost for _, position, orientation in goals for ghost in object_shapes(
         shape, state.size, (position, orientation), 'goals', GOAL_COLOUR)]
     try:
-        with BagWriter(path) as bag:
+        with staged(path) as temporary, BagWriter(temporary) as bag:
             for topic, type_name in contract.REPLAY_TOPIC_TYPES.items():
                 bag.add_topic('/' + topic, type_name, [LOOP_QOS])
             for time, links, object_pose in frames:

@@ -47,6 +47,7 @@ from hand_codesign.core.runs import library_versions
 from hand_codesign.core.search import Search
 from hand_codesign.core.summary import generation_summary
 from hand_codesign.core.summary import progress_line
+from hand_codesign.outputs import staged
 import numpy as np
 
 FIRST_EVALUATION_TIMEOUT = 3600.0
@@ -350,5 +351,6 @@ def restart_facts(optimizer, generation):
 
 def write_result(path, result, published):
     """Write a run's result (RunController's finish) and the messages it published as JSON."""
-    with open(path, 'w', encoding='utf-8') as stream:
-        json.dump(dict(result, published=published), stream, indent=2)
+    with staged(path) as temporary:   # whole or not at all: readers take it as the result
+        with open(temporary, 'w', encoding='utf-8') as stream:
+            json.dump(dict(result, published=published), stream, indent=2)

@@ -19,6 +19,14 @@ the run signs its own messages:
 - A Candidate's signature also covers the SHA-256 of its run's RunInfo (`run_digest`): an
   evaluator evaluates a candidate only with the task the optimizer announced, even if someone
   holding the run-info key announced another one under the same run id.
+- Each evaluator signs its heartbeats (EvaluatorStatus) with its key: the optimizer takes
+  them only so, and nobody can invent an evaluator or speak for one.
+- What a later reader trusts, the GenerationSummaries (resume rebuilds the search from them,
+  analyze draws them), needs a signature that a reader without the secret can check: the
+  optimizer draws an Ed25519 key pair per run (`SummaryKey`), announces the public half in
+  its RunInfo and signs every summary with the private half, which never leaves its memory.
+  A reader takes the first RunInfo of the run in the bag (the run's own: a forger learns the
+  run id only from it) and leaves out every summary whose signature fails (`summary_valid`).
 """
 
 import hashlib
@@ -27,8 +35,13 @@ import json
 import secrets
 import struct
 
+from cryptography.exceptions import InvalidSignature
+from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
+from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PublicKey
 from hand_codesign.core.contract import CANDIDATE_TYPE
 from hand_codesign.core.contract import EVALUATION_TYPE
+from hand_codesign.core.contract import EVALUATOR_STATUS_TYPE
+from hand_codesign.core.contract import GENERATION_SUMMARY_TYPE
 from hand_codesign.core.contract import RUN_INFO_TYPE
 from hand_codesign.errors import UserError
 
@@ -43,7 +56,8 @@ SIGNED_FIELDS = {
     RUN_INFO_TYPE: (
         ('run_id', 's'), ('task_name', 's'), ('task_yaml', 's'), ('seed', 'u'),
         ('algorithm', 's'), ('iterations', 'u'), ('population', 'u'), ('world_states', 'u'),
-        ('objective_names', 's[]'), ('versions', 's[]'), ('resumed_from', 's')),
+        ('objective_names', 's[]'), ('versions', 's[]'), ('resumed_from', 's'),
+        ('summary_key', 'u[]')),
     CANDIDATE_TYPE: (
         ('run_id', 's'), ('generation', 'u'), ('candidate_id', 'u'), ('evaluator_id', 's'),
         ('attempt', 'u'), ('structure', 'u[]'), ('world_states', 'u'), ('horizon', 'f'),
@@ -60,6 +74,19 @@ SIGNED_FIELDS = {
         ('unstable_worlds', 'u'), ('simulated_time', 'f'), ('wall_time', 'f'),
         ('world_objectives', 'f[]'), ('measured', 'u'), ('outcome_names', 's[]'),
         ('outcomes', 'f[]')),
+    GENERATION_SUMMARY_TYPE: (
+        ('run_id', 's'), ('generation', 'u'), ('structure', 'u[]'), ('check', 'u'),
+        ('horizon', 'f'), ('objective_names', 's[]'), ('best', 'f[]'), ('median', 'f[]'),
+        ('worst', 'f[]'), ('pareto_size', 'u'), ('pareto_front', 'f[]'),
+        ('best_candidate_id', 'u'), ('best_objectives', 'f[]'), ('best_fitness', 'f'),
+        ('best_genome', 'f[]'), ('told_ids', 'u[]'), ('told_objectives', 'f[]'),
+        ('evaluations', 'u'), ('wall_time', 'f'), ('final', 'u'), ('stop_reason', 's'),
+        ('rejected_evaluations', 'u'), ('audit_evaluations', 'u'), ('audited_ids', 'u[]'),
+        ('quarantined', 's[]'), ('reevaluations', 'u')),
+    EVALUATOR_STATUS_TYPE: (
+        ('evaluator_id', 's'), ('run_id', 's'), ('host', 's'), ('pid', 'u'), ('capacity', 'u'),
+        ('load', 'u'), ('evaluations_done', 'u'), ('steps_per_second', 'f'),
+        ('rejected_messages', 'u')),
 }
 UNSIGNED_FIELDS = ('signature', 'stamp')
 
@@ -169,6 +196,12 @@ class RunKeys:
         return _valid(self.key_of(evaluation.evaluator_id),
                       canonical(EVALUATION_TYPE, evaluation), evaluation.signature)
 
+    def status_valid(self, status):
+        """Return whether an EvaluatorStatus is signed with the key of its evaluator_id."""
+        # not cached in key_of: a forger inventing ids by the thousand would fill the cache
+        return _valid(evaluator_key(self.secret, status.evaluator_id),
+                      canonical(EVALUATOR_STATUS_TYPE, status), status.signature)
+
 
 class Credential:
     """An evaluator's side: its id, its key and the run-info key."""
@@ -209,3 +242,28 @@ class Credential:
 
     def sign_evaluation(self, evaluation):
         return hmac_sha256(self.key, canonical(EVALUATION_TYPE, evaluation))
+
+    def sign_status(self, status):
+        return hmac_sha256(self.key, canonical(EVALUATOR_STATUS_TYPE, status))
+
+
+class SummaryKey:
+    """The optimizer's Ed25519 key pair of one run, drawn afresh (never from the run's seed)."""
+
+    def __init__(self):
+        self._private = Ed25519PrivateKey.generate()
+        self.public = self._private.public_key().public_bytes_raw()   # 32 bytes
+
+    def sign(self, summary):
+        """Return the signature (64 bytes) of a GenerationSummary (object or mapping)."""
+        return self._private.sign(canonical(GENERATION_SUMMARY_TYPE, summary))
+
+
+def summary_valid(public_key, summary):
+    """Return whether a GenerationSummary (object or mapping) is signed under public_key."""
+    try:
+        Ed25519PublicKey.from_public_bytes(bytes(public_key)).verify(
+            bytes(_field(summary, 'signature')), canonical(GENERATION_SUMMARY_TYPE, summary))
+    except (InvalidSignature, ValueError):
+        return False
+    return True

@@ -25,6 +25,7 @@ import sys
 import time
 
 from hand_codesign.errors import UserError
+from hand_codesign.ros.lifeline import dies_with_me
 
 DEFAULT_PORT = 11811
 SERVER_ID = 0
@@ -84,7 +85,8 @@ class DiscoveryServer:
         with open(logs / 'discovery-server.log', 'w') as log:
             self.process = subprocess.Popen(
                 [server_executable(), '-i', str(SERVER_ID), '-p', str(self.port)],
-                stdout=log, stderr=subprocess.STDOUT, env=environment, start_new_session=True)
+                stdout=log, stderr=subprocess.STDOUT, env=environment, start_new_session=True,
+                preexec_fn=dies_with_me())   # no process of a run outlives its runner
         time.sleep(START_WAIT)
         if self.process.poll() is not None:
             raise UserError(f'--discovery-server: fast-discovery-server exited at once (code '

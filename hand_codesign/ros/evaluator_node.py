@@ -1,11 +1,13 @@
 """
 The evaluator node: evaluates candidates with hand_codesign.core.evaluate and answers them.
 
-Which candidates it takes and what it evaluates are core.evaluation_jobs' rules; it answers each
-candidate taken with an Evaluation or a rejection with the reason, never a crash; with a key
-(ros.keys) it takes only signed messages and signs its answers. Named after its evaluator id, two
-started alike do not clash. One thread does it all: between candidates and worlds (every
-POLL_PERIOD at most) it takes what arrived and beats the heartbeat (multithreaded: 25 % slower).
+Which candidates it takes and what it evaluates are core.evaluation_jobs' rules; it answers
+each candidate taken with an Evaluation or a rejection with the reason, never a crash; with a
+key (ros.keys) it takes only signed messages and signs its answers. Named after its evaluator
+id, two started alike do not clash. One thread does it all: between candidates and worlds
+(every POLL_PERIOD at most) it takes what arrived and beats the heartbeat (a
+MultiThreadedExecutor was 25 % slower). It ends with its runner, or optimizer_timeout s after
+the optimizer of its run left (ros.lifeline).
 """
 
 import collections
@@ -15,17 +17,14 @@ import sys
 import time
 
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.evaluation_jobs import CandidateRejected
-from hand_codesign.core.evaluation_jobs import EvaluatorInbox
+from hand_codesign.core.evaluation_jobs import CandidateRejected, EvaluatorInbox
 from hand_codesign.core.supervision import node_name
 from hand_codesign.ros import topics
-from hand_codesign.ros.conversions import evaluation_message
-from hand_codesign.ros.conversions import rejection_message
-from hand_codesign.ros.conversions import stamp_now
+from hand_codesign.ros.conversions import evaluation_message, rejection_message, stamp_now
 from hand_codesign.ros.keys import evaluator_credential
-from hand_codesign.ros.keys import sign_evaluation
-from hand_codesign.ros.node_main import run_node
-from hand_codesign.ros.node_main import take_arrived
+from hand_codesign.ros.keys import sign_evaluation, sign_status
+from hand_codesign.ros.lifeline import watch_optimizer
+from hand_codesign.ros.node_main import run_node, take_arrived
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign.ros.parameters import overrides
 from hand_codesign.ros.parameters import read_before_start
@@ -43,6 +42,7 @@ PARAMETERS = {
     'capacity': (2, 'candidates it asks to have queued at once', (1, 1000)),
     'heartbeat_period': (0.5, 'seconds between status messages', (0.01, 60.0)),
     'subscribers_expected': (1, 'evaluation subscribers to wait for before announcing', (0, 100)),
+    'optimizer_timeout': (60.0, 's a run may lack its optimizer; 0: no limit', (0.0, 1e6)),
 }
 IDLE_WAIT = 0.1  # s an idle evaluator waits for something to arrive
 POLL_PERIOD = 0.05  # s between looks at the executor while evaluating (a Task 5 world: 5 ms)
@@ -64,13 +64,13 @@ class EvaluatorNode(Node):
         self.evaluations, self.status = (self.create_publisher(
             topics.MESSAGE_TYPES[name], name, topics.QOS[name], event_callbacks=matched)
             for name in (topics.EVALUATIONS, topics.EVALUATOR_STATUS))
-        inbox = self.inbox
         for name, callback in (
-                (topics.RUN_INFO, lambda run: self.work.extend(inbox.run_announced(run))),
-                (topics.CANDIDATES, lambda one: self.work.extend(inbox.candidate_arrived(one)))):
+                (topics.RUN_INFO, lambda m: self.work.extend(self.inbox.run_announced(m))),
+                (topics.CANDIDATES, lambda m: self.work.extend(self.inbox.candidate_arrived(m)))):
             self.create_subscription(topics.MESSAGE_TYPES[name], name, callback, topics.QOS[name])
         self.create_timer(self.settings['heartbeat_period'], self.publish_status)
         self.create_timer(1.0, lambda: self.work.extend(self.inbox.orphans()))
+        watch_optimizer(self, topics.CANDIDATES, self.settings['optimizer_timeout'])
         self.last_poll = time.monotonic()
         self.get_logger().info(f'evaluator {self.evaluator_id} ready')
 
@@ -129,11 +129,11 @@ class EvaluatorNode(Node):
         # announced once the optimizer and the recorder match, the bag gets all its evaluations
         if self.evaluations.get_subscription_count() < self.settings['subscribers_expected']:
             return
-        self.status.publish(EvaluatorStatus(
+        self.status.publish(sign_status(self.key, EvaluatorStatus(
             evaluator_id=self.evaluator_id, run_id=self.settings['run_id'],
             host=socket.gethostname(), pid=os.getpid(), capacity=self.settings['capacity'],
             load=len(self.work), evaluations_done=self.done, rejected_messages=self.inbox.rejected,
-            steps_per_second=float(self.steps_per_second), stamp=stamp_now(self)))
+            steps_per_second=float(self.steps_per_second), stamp=stamp_now(self))))
 
 
 def farewell(node):

@@ -12,6 +12,7 @@ import array
 import os
 import pathlib
 import socket
+import stat
 
 from hand_codesign.core.signing import Credential
 from hand_codesign.core.signing import CREDENTIAL_VARIABLE
@@ -20,6 +21,8 @@ from hand_codesign.core.signing import run_digest
 from hand_codesign.core.signing import RunKeys
 from hand_codesign.core.signing import SECRET_VARIABLE
 from hand_codesign.core.signing import SigningError
+from hand_codesign.core.signing import SummaryKey
+from hand_codesign_msgs.msg import EvaluatorStatus
 
 
 def _bytes(signature):
@@ -27,10 +30,16 @@ def _bytes(signature):
 
 
 class OptimizerSigner:
-    """Sign the optimizer's RunInfo and Candidates; check Evaluations (all pass if unsigned)."""
+    """
+    Sign the optimizer's messages, check those of its evaluators.
+
+    Signed: RunInfo, Candidates, GenerationSummaries; checked: Evaluations and EvaluatorStatus
+    heartbeats (all pass in an unsigned run).
+    """
 
     def __init__(self, keys):
         self.keys = keys
+        self.summary_key = SummaryKey() if keys is not None else None
         self.digest = b''
         self.note = ('' if keys is not None else
                      '; UNSIGNED run (no run secret): any answer on the domain is taken')
@@ -43,6 +52,7 @@ class OptimizerSigner:
     def run_info(self, message):
         """Return the RunInfo signed; its digest is what the candidates' signatures cover."""
         if self.keys is not None:
+            message.summary_key = _bytes(self.summary_key.public)
             message.signature = _bytes(self.keys.sign_run_info(message))
             self.digest = run_digest(message)
         return message
@@ -52,8 +62,18 @@ class OptimizerSigner:
             message.signature = _bytes(self.keys.sign_candidate(message, self.digest))
         return message
 
-    def valid(self, evaluation):
-        return self.keys is None or self.keys.evaluation_valid(evaluation)
+    def summary(self, message):
+        if self.keys is not None:
+            message.signature = _bytes(self.summary_key.sign(message))
+        return message
+
+    def valid(self, message):
+        """Return whether an Evaluation or an EvaluatorStatus is signed by its evaluator."""
+        if self.keys is None:
+            return True
+        if isinstance(message, EvaluatorStatus):
+            return self.keys.status_valid(message)
+        return self.keys.evaluation_valid(message)
 
 
 def evaluator_credential(settings):
@@ -69,10 +89,7 @@ def evaluator_credential(settings):
     text = os.environ.pop(CREDENTIAL_VARIABLE, '')
     source = CREDENTIAL_VARIABLE
     if key_file:
-        path = pathlib.Path(key_file)
-        if not path.is_file():
-            raise SigningError(f'parameter key_file: {path} is not a file')
-        text, source = path.read_text(), f'key_file {path}'
+        text, source = read_key_file(pathlib.Path(key_file)), f'key_file {key_file}'
     if not text:
         return None, evaluator_id or f'{socket.gethostname()}-{os.getpid()}'
     credential = Credential.parse(text, source)
@@ -82,8 +99,31 @@ def evaluator_credential(settings):
     return credential, credential.evaluator_id
 
 
+def read_key_file(path):
+    """Return the text of a key file, which must be a file that only its owner can read."""
+    if not path.is_file():
+        raise SigningError(f'parameter key_file: {path} is not a file')
+    try:
+        mode = stat.S_IMODE(path.stat().st_mode)
+        if mode & 0o077:
+            raise SigningError(
+                f'parameter key_file: {path} has mode {mode:04o}, so other users may read the '
+                f'key; expected 0600 as `hand-codesign run --write-key-file` writes it '
+                f'(chmod 600 {path})')
+        return path.read_text()
+    except (OSError, UnicodeDecodeError) as error:
+        raise SigningError(f'parameter key_file: {path}: cannot read it: {error}') from None
+
+
 def sign_evaluation(credential, message):
     """Return the Evaluation signed with the evaluator's key (unchanged when unsigned)."""
     if credential is not None:
         message.signature = _bytes(credential.sign_evaluation(message))
+    return message
+
+
+def sign_status(credential, message):
+    """Return the EvaluatorStatus signed with the evaluator's key (unchanged when unsigned)."""
+    if credential is not None:
+        message.signature = _bytes(credential.sign_status(message))
     return message

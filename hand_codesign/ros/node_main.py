@@ -8,6 +8,7 @@ status 2, never a traceback; Ctrl-C and an external shutdown end the node normal
 import threading
 
 from hand_codesign.errors import UserError
+from hand_codesign.ros.lifeline import follow_runner
 import rclpy
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
@@ -23,8 +24,10 @@ def run_node(make_node, logger_name, args=None, errors=(), until=None, farewell=
     returning the Future whose completion ends the spin (None: spin until shutdown).
     farewell: a function of the node called once it is destroyed, e.g. to log what it did.
     spin: a function of (node, executor) that spins the node its own way instead of
-    rclpy.spin, with a SingleThreadedExecutor.
+    rclpy.spin, with a SingleThreadedExecutor. A node a runner started ends with the runner
+    (ros.lifeline).
     """
+    follow_runner()
     rclpy.init(args=args)
     node = None
     spinner = None

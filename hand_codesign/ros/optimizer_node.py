@@ -9,9 +9,7 @@ import sys
 
 from hand_codesign.core.audits import DEFAULT_FRACTION
 from hand_codesign.core.contract import STATUS_REJECTED
-from hand_codesign.core.controller import default_run_id
-from hand_codesign.core.controller import RunController
-from hand_codesign.core.controller import write_result
+from hand_codesign.core.controller import default_run_id, RunController, write_result
 from hand_codesign.core.dispatch import DispatchError
 from hand_codesign.core.runs import load_run_task
 from hand_codesign.core.task import TaskError
@@ -22,8 +20,7 @@ from hand_codesign.ros.conversions import markers_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.conversions import summary_message
 from hand_codesign.ros.keys import OptimizerSigner
-from hand_codesign.ros.node_main import on_line
-from hand_codesign.ros.node_main import run_node
+from hand_codesign.ros.node_main import on_line, run_node
 from hand_codesign.ros.package_files import package_file
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign.ros.topics import deliver
@@ -47,9 +44,8 @@ PARAMETERS = {
     'audit_fraction': (DEFAULT_FRACTION, 'share of answers audited (core.audits)', (0.0, 1.0)),
     'own_evaluators': ('', "roles of the run's own evaluators, a,b: see core.audits", None),
     'result_file': ('', 'write the final result as JSON here; empty: do not', None),
-    'resume_bag': ('', 'continue the run of this bag, with its task, seed and budget', None),
-    'start_signal': (False, 'send nothing before a line arrives on standard input (the runner '
-                            'sends it once its recorder records)', None),
+    'resume_bag': ('', 'continue the run of this bag (task, seed, budget: from the bag)', None),
+    'start_signal': (False, 'send nothing before a line on stdin (the recorder records)', None),
 }
 
 
@@ -109,7 +105,8 @@ class OptimizerNode(Node):
             self.tick()
 
     def on_status(self, message):
-        self.run.heard_from(message.evaluator_id, message.capacity, message.run_id)
+        if self.signer.valid(message):  # no one speaks for an evaluator or invents one
+            self.run.heard_from(message.evaluator_id, message.capacity, message.run_id)
         self.start_if_ready()
 
     def on_evaluation(self, message):
@@ -128,7 +125,8 @@ class OptimizerNode(Node):
             attempt, world_states, design)))
 
     def send_summary(self, summary):
-        self.publish(topics.GENERATION_SUMMARY, summary_message(self.run.run_id, summary))
+        message = summary_message(self.run.run_id, summary)
+        self.publish(topics.GENERATION_SUMMARY, self.signer.summary(message))
         self.publish(topics.BEST_DESIGN, markers_message(summary['best_design'], stamp_now(self)))
 
     def log(self, text, level='info'):  # 2 call sites: rclpy ties a severity to each

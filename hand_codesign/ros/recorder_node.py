@@ -14,6 +14,7 @@ import time
 
 from hand_codesign.core.contract import RECORDER_READY
 from hand_codesign.ros import topics
+from hand_codesign.ros.lifeline import follow_runner
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign.ros.recording import open_bag
 from hand_codesign.ros.recording import PARAMETERS
@@ -58,13 +59,11 @@ class Recorder(Node):
         """Return the raw subscription callback that writes the messages of topic name."""
         type_name = topics.type_name(topics.RECORDED_MESSAGE_TYPES[name])
         declared_qos = topics.QOS[name]
-        # The resolved (absolute) name is known once the subscription exists.
-        resolved = []
+        resolved = []  # the resolved (absolute) name, known once the subscription exists
 
         def record(data, message_info):
             log_time = time.time_ns()
-            if not resolved:
-                resolved.append(self.resolve_topic_name(name))
+            resolved[:] = resolved or [self.resolve_topic_name(name)]
             topic = resolved[0]
             if not self.bag.has_topic(topic):
                 self.bag.add_topic(topic, type_name, self._offered_qos(topic, declared_qos))
@@ -123,6 +122,7 @@ def main(args=None):
     early_signals = []
     signal.signal(signal.SIGINT, lambda number, frame: early_signals.append(number))
     signal.signal(signal.SIGTERM, lambda number, frame: early_signals.append(number))
+    follow_runner()   # a runner that dies sends SIGTERM: the bag is closed
     recorder = None
     status = 0
     try:

@@ -18,6 +18,7 @@ from hand_codesign.core.runs import run_task
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import candidate_message
 from hand_codesign.ros.conversions import stamp_now
+from hand_codesign.ros.lifeline import follow_runner
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import RunInfo
 import rclpy
@@ -96,6 +97,7 @@ class ReevaluationNode(Node):
 
 
 def main(args=None):
+    follow_runner()
     rclpy.init(args=args)
     node = None
     code = 1

@@ -22,7 +22,7 @@ from hand_codesign.ros.conversions import rejection_message
 from hand_codesign.ros.conversions import stamp_now
 from hand_codesign.ros.conversions import trial_request
 from hand_codesign.ros.keys import evaluator_credential
-from hand_codesign.ros.keys import sign_evaluation
+from hand_codesign.ros.keys import sign_evaluation, sign_status
 from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign_msgs.msg import EvaluatorStatus
@@ -114,10 +114,10 @@ class RigEvaluatorNode(Node):
         evaluations = self.publishers_[contract.EVALUATIONS]
         if evaluations.get_subscription_count() < self.settings['subscribers_expected']:
             return
-        self.publishers_[contract.EVALUATOR_STATUS].publish(EvaluatorStatus(
+        self.publishers_[contract.EVALUATOR_STATUS].publish(sign_status(self.key, EvaluatorStatus(
             evaluator_id=self.evaluator_id, run_id=self.settings['run_id'],
             host=socket.gethostname(), pid=os.getpid(), capacity=1, load=self.rig.load(),
-            evaluations_done=self.rig.done, stamp=stamp_now(self)))
+            evaluations_done=self.rig.done, stamp=stamp_now(self))))
 
 
 def main(args=None):

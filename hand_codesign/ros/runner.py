@@ -45,6 +45,7 @@ from hand_codesign.core.supervision import RECORDER
 from hand_codesign.core.supervision import Supervisor
 from hand_codesign.errors import UserError
 from hand_codesign.ros.discovery import start_profile
+from hand_codesign.ros.lifeline import runner_environment
 
 DOMAIN_IDS = range(1, 101)   # those a free pick (--domain-id auto) takes
 MAX_DOMAIN_ID = 232   # the highest ROS_DOMAIN_ID ROS 2 accepts
@@ -90,7 +91,8 @@ class System:
             ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE',
                                                          'LOCALHOST'),
             AMENT_PREFIX_PATH=os.environ.get('AMENT_PREFIX_PATH', sys.prefix),
-            RCUTILS_CONSOLE_OUTPUT_FORMAT='[{severity}] [{name}]: {message}')
+            RCUTILS_CONSOLE_OUTPUT_FORMAT='[{severity}] [{name}]: {message}',
+            **runner_environment())   # no process of the run outlives the runner
         self.environment.update(start_profile(self.environment))
         self.discovery = discovery
         if discovery is not None:
