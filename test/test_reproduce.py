@@ -474,3 +474,15 @@ def test_every_preset_and_table_named_in_results_exists_and_checks():
             load_task(path)
     for table in set(re.findall(r'(?:docs/)?(results/[\w.-]+/[\w.-]+\.(?:md|csv|png))', text)):
         assert (ROOT / 'docs' / table).exists(), f'docs/RESULTS.md names a missing {table}'
+
+
+def test_seeds_are_a_count_a_range_or_a_list(capsys):
+    assert experiments.parse_seeds('3') == (1, 2, 3)  # the tuning seeds
+    assert experiments.parse_seeds('101-105') == (101, 102, 103, 104, 105)  # fresh seeds
+    assert experiments.parse_seeds('4,7,4') == (4, 7)
+    assert experiments.seeds_text((101, 102, 103)) == 'seeds 101 to 103'
+    assert experiments.seeds_text((4, 7)) == 'seeds 4, 7'
+    for bad in ('0', '5-x', '', '3-1'):
+        assert cli.main(['reproduce', 'levers-task6', '--seeds', bad]) == 2
+        error = capsys.readouterr().err.strip()
+        assert error.count('\n') == 0 and '--seeds' in error and repr(bad) in error
