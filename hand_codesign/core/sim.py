@@ -135,6 +135,8 @@ class EventPlan:
 class Simulator:
     """A PyBullet client with the scene of one candidate and the rollout loop."""
 
+    engine = 'pybullet'
+
     def __init__(self, rendering=False):
         with c_output_silenced():
             self.client = Client(connection_mode=pybullet.DIRECT)
@@ -213,6 +215,10 @@ class Simulator:
             if any(point[8] < depth for point in points):
                 return True
         return False
+
+    def object_shape(self, state, shape):
+        """Return the collision shape id of a world's object (ObjectState, task shape name)."""
+        return object_shape(self.client, state, shape)
 
     def create_object(self, state, shape):
         """
