@@ -29,11 +29,11 @@ from typing import Optional, Sequence, Tuple
 
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.hand import hand_model
+from hand_codesign.core.mujoco_sim import MujocoSimulator
 from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
                                            task_torque_penalty, weighted_fitness)
 from hand_codesign.core.outcomes import OutcomeWatch, task_outcomes
 from hand_codesign.core.policies import make_policy
-from hand_codesign.core.mujoco_sim import MujocoSimulator
 from hand_codesign.core.sim import Simulator
 from hand_codesign.core.worlds import object_state, world_states
 import numpy as np
@@ -71,7 +71,7 @@ _ENGINES = {'pybullet': Simulator, 'mujoco': MujocoSimulator}
 
 
 def shared_simulator(engine='pybullet'):
-    """Return this process's simulator of `engine` (task.physics.engine; created on first use)."""
+    """Return this process's simulator of `engine` (task.physics.engine), made on first use."""
     simulator = _SIMULATORS.get(engine)
     if simulator is None or simulator.client is None:
         simulator = _SIMULATORS[engine] = _ENGINES[engine]()

@@ -13,7 +13,11 @@ inertia, friction and pose are written into the compiled model for each world
 is a function of that world alone, so rollouts do not depend on the order of the worlds.
 
 Settings chosen to match Bullet on this model (one place; measured in test_mujoco_sim.py):
-- Joint ranges are radians (`compiler.degree` off: MjSpec reads degrees by default).
+- Joint ranges are radians (`compiler.degree` off: MjSpec reads degrees by default); equal
+  limits (a locked joint, which Bullet accepts) become a range of LOCKED_RANGE.
+- The palm is a box given as a convex mesh: MuJoCo's analytic capsule-box test missed a
+  segment piercing the thin palm (Bullet: 2.8 cm deep; MuJoCo's box: no contact, 3.7 mm
+  apart), the general convex test finds it.
 - The palm is welded to the world, and MuJoCo's parent filter does not apply to bodies welded
   to the world: palm and every finger's first segment are excluded explicitly (Bullet does not
   collide a link with its parent). Non-adjacent links collide, as with Bullet's
@@ -52,8 +56,12 @@ import numpy as np
 MUJOCO_VERSION = mujoco.__version__
 GROUND_SIZE = 50.0  # m, half extent of the ground plane (only drawn; a plane is infinite)
 CONTACT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
+LIMIT_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 SOLREF_DAMPING_RATIO = 1.0  # critical damping: nothing bounces, as in Bullet
 HAND_PRIORITY, OBJECT_PRIORITY = 1, 2
+# rad: the range of a joint whose limits coincide (Bullet locks it there; MuJoCo wants
+# lower < upper)
+LOCKED_RANGE = 1e-9
 _DIVERGENCE_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQPOS,
                         mujoco.mjtWarning.mjWARN_BADQVEL)
 
@@ -128,10 +136,12 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
                     model.palm_mass * (sx * sx + sz * sz) / 12,
                     model.palm_mass * (sx * sx + sy * sy) / 12]
     palm.explicitinertial = True
-    hand_geom = dict(friction=[model.friction, 0, 0], condim=3, priority=HAND_PRIORITY,
-                     solref=solref, solimp=CONTACT_SOLIMP)
-    palm.add_geom(name='palm', type=mujoco.mjtGeom.mjGEOM_BOX,
-                  size=[sx / 2, sy / 2, sz / 2], **hand_geom)
+    hand_geom = {'friction': [model.friction, 0, 0], 'condim': 3,
+                 'priority': HAND_PRIORITY, 'solref': solref, 'solimp': CONTACT_SOLIMP}
+    corners = [[x * sx / 2, y * sy / 2, z * sz / 2]
+               for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    spec.add_mesh(name='palm', uservert=[value for corner in corners for value in corner])
+    palm.add_geom(name='palm', type=mujoco.mjtGeom.mjGEOM_MESH, meshname='palm', **hand_geom)
     bodies = []
     for link in model.links:
         parent = palm if link.parent < 0 else bodies[link.parent]
@@ -141,12 +151,13 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
         body.inertia = list(link.inertia)
         body.explicitinertial = True
         body.gravcomp = 1.0 if gravity_compensation else 0.0
-        joint = dict(name=link.joint_name, type=mujoco.mjtJoint.mjJNT_HINGE,
-                     axis=list(link.joint_axis))
+        joint = {'name': link.joint_name, 'type': mujoco.mjtJoint.mjJNT_HINGE,
+                 'axis': list(link.joint_axis)}
         if link.lower_limit is not None:
-            joint.update(range=[link.lower_limit, link.upper_limit],
+            upper = max(link.upper_limit, link.lower_limit + LOCKED_RANGE)
+            joint.update(range=[link.lower_limit, upper],
                          limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                         solref_limit=solref, solimp_limit=CONTACT_SOLIMP)
+                         solref_limit=solref, solimp_limit=LIMIT_SOLIMP)
         body.add_joint(**joint)
         if link.cylinder_height > 0:
             body.add_geom(name=link.name, type=mujoco.mjtGeom.mjGEOM_CAPSULE,
@@ -178,6 +189,7 @@ class MujocoSimulator:
     engine = 'mujoco'
 
     def __init__(self):
+        """Start without a model: `build` compiles one per candidate."""
         self.client = self  # evaluate() checks a simulator's client to know it is open
         self.task = None
         self.model = None  # the HandModel
@@ -191,9 +203,11 @@ class MujocoSimulator:
         self.mj_model = self.mj_data = None
 
     def __enter__(self):
+        """Return the simulator, closed at the end of the with block."""
         return self
 
     def __exit__(self, *exc_info):
+        """Close the simulator."""
         self.close()
 
     # ---------------------------------------------------------------- scene
@@ -397,7 +411,7 @@ def mujoco_torques(policy, m, d, num_steps):
     scratch = mujoco.MjData(m)
     result = np.zeros(m.nv)
 
-    def inverse_dynamics(angles, velocities, accelerations):
+    def inverse_dynamics(velocities, accelerations):
         scratch.qvel[:joints] = velocities
         scratch.qacc[:joints] = accelerations
         mujoco.mj_comVel(m, scratch)
@@ -414,11 +428,9 @@ def mujoco_torques(policy, m, d, num_steps):
         scratch.qpos[:] = d.qpos
         mujoco.mj_kinematics(m, scratch)
         mujoco.mj_comPos(m, scratch)
-        plus = inverse_dynamics(angles, [v + vd for v, vd in zip(velocities,
-                                                                  target_velocities)],
+        plus = inverse_dynamics([v + vd for v, vd in zip(velocities, target_velocities)],
                                 twice_a)
-        minus = inverse_dynamics(angles, [v - vd for v, vd in zip(velocities,
-                                                                   target_velocities)],
+        minus = inverse_dynamics([v - vd for v, vd in zip(velocities, target_velocities)],
                                  [-a for a in twice_a])
         return ((plus - minus) * 0.25).tolist()
     return torques
