@@ -45,6 +45,8 @@ def add_run_arguments(parser):
     parser.add_argument('--iterations', type=int, help='generations per structure')
     parser.add_argument('--popsize', type=int, help='candidates per generation')
     parser.add_argument('--world-states', type=int, help='randomized worlds per candidate')
+    parser.add_argument('--engine', choices=('pybullet', 'mujoco'),
+                        help="physics engine (default: the task file's physics.engine)")
     parser.add_argument('--resume', metavar='BAG', help='continue the run recorded in BAG')
     parser.add_argument('--domain-id', type=int,
                         help='ROS_DOMAIN_ID of the run (default: a free one of this host)')

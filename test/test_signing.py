@@ -63,7 +63,8 @@ def test_the_signed_bytes_are_those_the_msg_comment_spells():
     run = RunInfo(run_id='r', task_name='t')
     run_bytes = (string('hand_codesign_msgs/msg/RunInfo') + string('r') + string('t')
                  + string('') + struct.pack('<Q', 0) + string('') + struct.pack('<QQQ', 0, 0, 0)
-                 + struct.pack('<I', 0) * 2 + string(''))
+                 + struct.pack('<I', 0) * 2 + string('')
+                 + string('') * 2)  # engine, engine_version
     candidate_bytes = (
         string('hand_codesign_msgs/msg/Candidate') + string('r') + struct.pack('<QQ', 1, 2)
         + string('é') + struct.pack('<Q', 3) + struct.pack('<IQQ', 2, 2, 1)

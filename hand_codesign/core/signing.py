@@ -43,7 +43,8 @@ SIGNED_FIELDS = {
     RUN_INFO_TYPE: (
         ('run_id', 's'), ('task_name', 's'), ('task_yaml', 's'), ('seed', 'u'),
         ('algorithm', 's'), ('iterations', 'u'), ('population', 'u'), ('world_states', 'u'),
-        ('objective_names', 's[]'), ('versions', 's[]'), ('resumed_from', 's')),
+        ('objective_names', 's[]'), ('versions', 's[]'), ('resumed_from', 's'),
+        ('engine', 's'), ('engine_version', 's')),
     CANDIDATE_TYPE: (
         ('run_id', 's'), ('generation', 'u'), ('candidate_id', 'u'), ('evaluator_id', 's'),
         ('attempt', 'u'), ('structure', 'u[]'), ('world_states', 'u'), ('horizon', 'f'),
