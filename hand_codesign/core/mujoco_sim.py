@@ -46,6 +46,7 @@ import math
 from typing import Callable, Optional
 
 from hand_codesign.core.hand import HandModel
+from hand_codesign.core.outcomes import CONTACT_DISTANCE
 from hand_codesign.core.policies import TorquePolicy
 from hand_codesign.core.sim import (_FRAME, _JOINT_WATCH, _RECORD, COLLISION_TOLERANCE,
                                     EventPlan, EXPLOSION_DISTANCE, EXPLOSION_JOINT_SPEED,
@@ -54,6 +55,9 @@ import mujoco
 import numpy as np
 
 MUJOCO_VERSION = mujoco.__version__
+# m: contacts of the object are detected this far apart (margin) but act only when they
+# penetrate (gap = margin), so core.outcomes can read touches without changing the physics
+TOUCH_MARGIN = CONTACT_DISTANCE
 GROUND_SIZE = 50.0  # m, half extent of the ground plane (only drawn; a plane is infinite)
 CONTACT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
 LIMIT_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
@@ -177,7 +181,7 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
     thing.explicitinertial = True
     thing.add_geom(name='object', type=_GEOM_TYPES[object_shape], size=[0.01, 0.01, 0.01],
                    friction=[1.0, 0, 0], condim=3, priority=OBJECT_PRIORITY, solref=solref,
-                   solimp=CONTACT_SOLIMP)
+                   solimp=CONTACT_SOLIMP, margin=TOUCH_MARGIN, gap=TOUCH_MARGIN)
     spec.add_pair(name='object_ground', geomname1='object', geomname2='ground', condim=3,
                   friction=[1.0, 1.0, 0.0, 0.0, 0.0], solref=solref, solimp=CONTACT_SOLIMP)
     return spec
@@ -222,6 +226,7 @@ class MujocoSimulator:
         self.task, self.model = task, model
         self._joints = model.num_joints
         self._object_body = self.mj_model.body('object').id
+        self._palm_body = self.mj_model.body('palm').id
         self._object_geom = self.mj_model.geom('object').id
         self._object_pair = self.mj_model.pair('object_ground').id
         self._object_qpos = self.mj_model.jnt_qposadr[self.mj_model.joint('object').id]
@@ -387,6 +392,28 @@ class MujocoSimulator:
                                                            < EXPLOSION_JOINT_SPEED)):
                 return False
         return True
+
+    def joint_angles(self):
+        """Return the hand's joint angles (rad), in joint order."""
+        return self.mj_data.qpos[:self._joints].tolist()
+
+    def touching_links(self, distance):
+        """
+        Return the indices of the links with a contact at most `distance` (m) from the object.
+
+        Contacts up to TOUCH_MARGIN apart are detected (the object's margin) but inactive
+        (its gap), so reading them changes nothing in the physics.
+        """
+        m, d = self.mj_model, self.mj_data
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_collision(m, d)
+        links = set()
+        for contact in d.contact[:d.ncon]:
+            one, two = contact.geom
+            other = two if one == self._object_geom else one if two == self._object_geom else -1
+            if other in self._hand_geoms and contact.dist <= distance:
+                links.add(int(m.geom_bodyid[other]) - self._palm_body - 1)  # palm: -1
+        return links
 
     def joint_states(self):
         """Return the hand's joint angles (rad) and speeds (rad/s) as lists."""

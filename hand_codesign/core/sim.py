@@ -234,6 +234,15 @@ class Simulator:
         self.object_body = body
         return body
 
+    def touching_links(self, distance):
+        """Return the set of the hand's links with a contact point at most `distance` (m)."""
+        return {point[3] for point in self.client.getContactPoints(self.hand, self.object_body)
+                if point[8] <= distance}
+
+    def joint_angles(self):
+        """Return the hand's joint angles (rad), in joint order."""
+        return [state[0] for state in self.client.getJointStates(self.hand, self._joints)]
+
     def remove_object(self):
         """Remove the current world's object (the scene is back to ground and hand)."""
         if self.object_body is not None:
