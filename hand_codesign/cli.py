@@ -121,8 +121,8 @@ def add_bag_arguments(verb, parser):
                             help='also measure the best design on N worlds it never trained '
                                  'on, as `reproduce` does (e.g. 1000; default: skip)')
         parser.add_argument('--engine', choices=('pybullet', 'mujoco'),
-                            help="with --unseen: the physics engine to measure in (default: "
-                                 "the run's)")
+                            help='with --unseen: the physics engine to measure in '
+                                 "(default: the run's)")
     elif verb == 'replay':
         parser.add_argument('--generation', type=int, help='generation (default: the best)')
         parser.add_argument('--rank', type=int, default=0,

@@ -138,9 +138,9 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     """
     Return the Evaluation of a Design on `task`.
 
-    `simulator` defaults to the process-wide one of the task's engine (physics.engine). For replay: `on_world(index, simulator)`
-    is called before each world's rollout and `on_frame(step, simulator)` at its frames
-    (see Simulator.rollout).
+    `simulator` defaults to the process-wide one of the task's engine (physics.engine). For
+    replay: `on_world(index, simulator)` is called before each world's rollout and
+    `on_frame(step, simulator)` at its frames (see Simulator.rollout).
     """
     context = _TaskContext.of(task)
     states, initial = context.objects(worlds)

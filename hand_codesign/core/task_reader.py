@@ -16,8 +16,8 @@ from hand_codesign.core.design import (ControllerDesign, Design, FingerDesign, H
 from hand_codesign.core.rotations import axis_angle_quaternion
 from hand_codesign.core.task_checks import check_task
 from hand_codesign.core.task_spec import (ALGORITHMS, ARCHIVE_DESCRIPTOR_NAMES, ArchiveSpec,
-                                          AXES, Bounds, DISTANCES,
-                                          EarlyTerminationSpec, ENGINES, GoalSpec, HandSpec, HierarchySpec,
+                                          AXES, Bounds, DISTANCES, EarlyTerminationSpec,
+                                          ENGINES, GoalSpec, HandSpec, HierarchySpec,
                                           HorizonSpec, MORPHOLOGY_PARAMETERS, MorphologySpec,
                                           ObjectSpec, OrientationGoal, ParameterSpec, PhysicsSpec,
                                           POLICY_KINDS, PolicySpec, PositionGoal,
