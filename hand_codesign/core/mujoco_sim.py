@@ -120,7 +120,8 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
     Return the MjSpec of ground, hand and object (its size set per world later).
 
     `base_orientation` is x, y, z, w as everywhere in this package (MuJoCo's order is w first).
-    Segments are bodies `<link name>` with hinges `<joint name>`; the object is body `object`.
+    Segments are bodies `<link name>` with hinges `<joint name>`; the object is body `object`
+    (none with object_shape=None).
     """
     spec = mujoco.MjSpec()
     spec.modelname = 'hand'
@@ -174,6 +175,8 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
         if link.parent < 0:
             spec.add_exclude(bodyname1='palm', bodyname2=link.name)
         bodies.append(body)
+    if object_shape is None:
+        return spec
     thing = world.add_body(name='object', pos=[0.0, 0.0, 1.0])
     thing.add_freejoint(name='object')
     thing.mass = 1.0
@@ -185,6 +188,22 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
     spec.add_pair(name='object_ground', geomname1='object', geomname2='ground', condim=3,
                   friction=[1.0, 1.0, 0.0, 0.0, 0.0], solref=solref, solimp=CONTACT_SOLIMP)
     return spec
+
+
+def model_mjcf(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
+               base_orientation=(0.0, 0.0, 0.0, 1.0), gravity_compensation=False, name='hand'):
+    """
+    Return the MJCF text (hand.xml) of a hand model on the ground, as the simulator builds it.
+
+    Its keyframe `initial` holds the initial joint angles (MJCF, like URDF, starts every joint
+    at 0 otherwise): `mj_resetDataKeyframe(model, data, 0)` starts the hand as simulated.
+    """
+    spec = hand_spec(model, time_step, base_position, base_orientation, None,
+                     gravity_compensation)
+    spec.modelname = name
+    spec.add_key(name='initial', qpos=list(model.initial_angles))
+    spec.compile()
+    return spec.to_xml()
 
 
 class MujocoSimulator:
