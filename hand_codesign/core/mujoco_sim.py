@@ -8,9 +8,9 @@ watches and frames), so core.evaluate runs either engine from the task's
 HandModel table that core.hand builds in PyBullet: a ground plane, the palm welded to the world
 at the hand's base pose, one body per segment with its hinge, capsule, mass and inertia (about
 its centre, link axes, given explicitly), and one free object body whose shape, size, mass,
-inertia, friction and pose are written into the compiled model for each world
-(`_load_world`, then mj_setConst): no recompilation per world, and every field a world writes
-is a function of that world alone, so rollouts do not depend on the order of the worlds.
+inertia, friction and pose are set in the candidate's MjSpec, which is compiled for each
+world (about 1 ms; `_load_world` says why not in place): every world starts from a freshly
+compiled model and data, so rollouts do not depend on the order of the worlds.
 
 Settings chosen to match Bullet on this model (one place; measured in test_mujoco_sim.py):
 - Joint ranges are radians (`compiler.degree` off: MjSpec reads degrees by default); equal
@@ -240,8 +240,11 @@ class MujocoSimulator:
         spec = hand_spec(model, task.time_step, task.hand.base_position,
                          task.hand.base_orientation, task.object_spec.shape,
                          task.policy.gravity_compensation)
+        self._spec = spec
         self.mj_model = spec.compile()
         self.mj_data = mujoco.MjData(self.mj_model)
+        # start collisions need the object's geometry only: written into this copy in place
+        self._collision_model, self._collision_data = self.mj_model, self.mj_data
         self.task, self.model = task, model
         self._joints = model.num_joints
         self._object_body = self.mj_model.body('object').id
@@ -260,34 +263,53 @@ class MujocoSimulator:
         return shape
 
     def _load_world(self, state, shape):
-        """Write a world's object (size, mass, inertia, friction, start pose) into the model."""
+        """
+        Compile the scene with a world's object (size, mass, inertia, friction, start pose).
+
+        Compiled per world, not written into the compiled model: mj_setConst leaves the
+        object's dof_M0 and dof_invweight0 (which scale the contact impedance) as they were.
+        """
         key = (state, shape)
         if self._loaded == key:
             return
-        m = self.mj_model
-        size, bound, half = _geom_size(shape, state.size)
-        body, geom, start = self._object_body, self._object_geom, self._object_qpos
-        m.geom_size[geom] = size
-        m.geom_rbound[geom] = bound
-        m.geom_aabb[geom] = (0.0, 0.0, 0.0, *half)
-        m.geom_friction[geom, 0] = self.model.friction * state.friction
-        m.pair_friction[self._object_pair, :2] = state.friction
-        m.body_mass[body] = state.mass
-        m.body_inertia[body] = object_inertia(shape, state.size, state.mass)
-        m.qpos0[start:start + 3] = state.position
-        m.qpos0[start + 3:start + 7] = _wxyz(state.orientation)
-        mujoco.mj_setConst(m, self.mj_data)
+        spec = self._spec
+        size, _, _ = _geom_size(shape, state.size)
+        geom, body = spec.geom('object'), spec.body('object')
+        geom.size = list(size)
+        geom.friction = [self.model.friction * state.friction, 0.0, 0.0]
+        spec.pair('object_ground').friction = [state.friction, state.friction, 0.0, 0.0, 0.0]
+        body.mass = state.mass
+        body.inertia = list(object_inertia(shape, state.size, state.mass))
+        body.pos = list(state.position)
+        body.quat = _wxyz(state.orientation)
+        self.mj_model = spec.compile()
+        self.mj_data = mujoco.MjData(self.mj_model)
         self._loaded = key
 
     def reset(self, state, shape):
         """Load a world and put hand and object at their start, at rest (a fresh state)."""
         self._load_world(state, shape)
-        m, d = self.mj_model, self.mj_data
+        self._start(self.mj_model, self.mj_data, state)
+
+    def _start(self, m, d, state):
         mujoco.mj_resetData(m, d)
         d.qpos[:self._joints] = self.model.initial_angles
         start = self._object_qpos
         d.qpos[start:start + 3] = state.position
         d.qpos[start + 3:start + 7] = _wxyz(state.orientation)
+
+    def _place_geometry(self, state, shape):
+        """Write a world's object geometry and pose into the collision copy of the model."""
+        m, d = self._collision_model, self._collision_data
+        size, bound, half = _geom_size(shape, state.size)
+        geom = self._object_geom
+        m.geom_size[geom] = size
+        m.geom_rbound[geom] = bound
+        m.geom_aabb[geom] = (0.0, 0.0, 0.0, *half)
+        self._start(m, d, state)
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_collision(m, d)
+        return d
 
     def start_collisions(self, objects):
         """
@@ -296,12 +318,9 @@ class MujocoSimulator:
         `objects` is a list of (ObjectState, shape) of the worlds; a contact counts when it
         penetrates deeper than COLLISION_TOLERANCE, as in core.sim.
         """
-        m, d = self.mj_model, self.mj_data
         hand = self._hand_geoms
-        for index, (state, shape) in enumerate(objects):
-            self.reset(state, shape)
-            mujoco.mj_kinematics(m, d)
-            mujoco.mj_collision(m, d)
+        for state, shape in objects:
+            d = self._place_geometry(state, shape)
             for contact in d.contact[:d.ncon]:
                 if contact.dist >= -COLLISION_TOLERANCE:
                     continue
