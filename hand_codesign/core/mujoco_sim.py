@@ -244,7 +244,8 @@ class MujocoSimulator:
         self.mj_model = spec.compile()
         self.mj_data = mujoco.MjData(self.mj_model)
         # start collisions need the object's geometry only: written into this copy in place
-        self._collision_model, self._collision_data = self.mj_model, self.mj_data
+        self._collision_model = self.mj_model
+        self._scratch = None  # the PD law's MjData, made on first use
         self.task, self.model = task, model
         self._joints = model.num_joints
         self._object_body = self.mj_model.body('object').id
@@ -282,8 +283,9 @@ class MujocoSimulator:
         body.inertia = list(object_inertia(shape, state.size, state.mass))
         body.pos = list(state.position)
         body.quat = _wxyz(state.orientation)
+        # every world's model has the same sizes, so one MjData serves them all (making one
+        # costs more than compiling); reset() clears it completely before each rollout
         self.mj_model = spec.compile()
-        self.mj_data = mujoco.MjData(self.mj_model)
         self._loaded = key
 
     def reset(self, state, shape):
@@ -300,7 +302,7 @@ class MujocoSimulator:
 
     def _place_geometry(self, state, shape):
         """Write a world's object geometry and pose into the collision copy of the model."""
-        m, d = self._collision_model, self._collision_data
+        m, d = self._collision_model, self.mj_data
         size, bound, half = _geom_size(shape, state.size)
         geom = self._object_geom
         m.geom_size[geom] = size
@@ -371,7 +373,9 @@ class MujocoSimulator:
 
     def _run(self, policy, plan, trace, state, on_frame):
         m, d = self.mj_model, self.mj_data
-        torques = mujoco_torques(policy, m, d, plan.num_steps)
+        if self._scratch is None and not isinstance(policy, TorquePolicy):
+            self._scratch = mujoco.MjData(m)
+        torques = mujoco_torques(policy, m, d, plan.num_steps, self._scratch)
         joints = self._joints
         applied = d.qfrc_applied
         step_once = mujoco.mj_step
@@ -459,21 +463,22 @@ class MujocoSimulator:
         return d.qpos[:joints].tolist(), d.qvel[:joints].tolist()
 
 
-def mujoco_torques(policy, m, d, num_steps):
+def mujoco_torques(policy, m, d, num_steps, scratch=None):
     """
     Return torques(step) -> joint torques of a core.policies policy on a MuJoCo scene.
 
     Torque policy: its rows (gravity compensation, if any, is the model's gravcomp). PD
     policy: eq. (1) in the stable form of core.policies, M a + C(theta, thetad) thetad_d by
     the same polarization of inverse dynamics (mj_rne on a scratch MjData); N(theta) is the
-    model's gravcomp when the policy compensates gravity.
+    model's gravcomp when the policy compensates gravity. `scratch`: an MjData of a model of
+    the same sizes for the PD law's inverse dynamics (default: a new one).
     """
     if isinstance(policy, TorquePolicy):
         return policy.schedule(num_steps).__getitem__
     target_rows, velocity_rows = policy.track(num_steps)
     gains = policy.step_gains()
     joints = policy.num_joints
-    scratch = mujoco.MjData(m)
+    scratch = mujoco.MjData(m) if scratch is None else scratch
     result = np.zeros(m.nv)
 
     def inverse_dynamics(velocities, accelerations):
