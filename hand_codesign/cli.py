@@ -82,6 +82,8 @@ def add_rig_arguments(parser):
                         help='--rig sim: poses per second (default 0: every physics step)')
     parser.add_argument('--rig-phase', type=float, default=0.0,
                         help='--rig sim: offset of the pose clock, in sample periods')
+    parser.add_argument('--rig-engine', choices=('pybullet', 'mujoco'),
+                        help="--rig sim: the rig's physics engine (default: the run's)")
 
 
 def add_check_arguments(parser):

@@ -148,7 +148,10 @@ def rig_parameters(arguments):
     if arguments.rig_rate < 0 or not 0 <= arguments.rig_phase <= 1:
         raise UserError(f'--rig-rate {arguments.rig_rate} / --rig-phase {arguments.rig_phase}: '
                         'expected a rate >= 0 (0: every physics step) and a phase in [0, 1]')
-    return {'rate': float(arguments.rig_rate), 'phase': float(arguments.rig_phase)}
+    parameters = {'rate': float(arguments.rig_rate), 'phase': float(arguments.rig_phase)}
+    if getattr(arguments, 'rig_engine', None):  # rcl refuses an empty value
+        parameters['engine'] = arguments.rig_engine
+    return parameters
 
 
 @contextlib.contextmanager

@@ -234,6 +234,10 @@ class Simulator:
         self.object_body = body
         return body
 
+    def object_pose(self):
+        """Return the current object's (position, orientation x, y, z, w)."""
+        return self.client.getBasePositionAndOrientation(self.object_body)
+
     def touching_links(self, distance):
         """Return the set of the hand's links with a contact point at most `distance` (m)."""
         return {point[3] for point in self.client.getContactPoints(self.hand, self.object_body)
