@@ -150,3 +150,15 @@ def test_a_design_starting_in_the_ground_collides_on_mujoco(task):
     assert result.collision
     np.testing.assert_array_equal(result.objectives, [COLLISION_PENALTY] * 2)
     assert result.simulated_time == 0.0
+
+
+@pytest.mark.parametrize('preset', sorted(path.name for path in TASKS.glob('*.yaml')))
+def test_every_preset_runs_on_mujoco(preset):
+    task = on_mujoco(load_task(TASKS / preset).replace(num_world_states=2))
+    spec = genome_spec(task)
+    generator = np.random.default_rng(2)
+    # the first of a few designs around the search's start that does not start in collision
+    result = next(result for result in (
+        evaluate(np.clip(spec.initial_mean() + 0.1 * generator.normal(size=spec.size), 0, 1),
+                 task) for _ in range(30)) if not result.collision)
+    assert result.simulated_time > 0 and np.all(np.isfinite(result.objectives))
