@@ -162,3 +162,16 @@ def test_every_preset_runs_on_mujoco(preset):
         evaluate(np.clip(spec.initial_mean() + 0.1 * generator.normal(size=spec.size), 0, 1),
                  task) for _ in range(30)) if not result.collision)
     assert result.simulated_time > 0 and np.all(np.isfinite(result.objectives))
+
+
+def test_open_loop_torques_stepped_in_c_are_the_steps_one_at_a_time(task):
+    design = fingers_design(task, angle=0.2, lengths=(0.06, 0.06),
+                            torques=[-0.006, -0.004, 0.008, 0.003])
+    mj = on_mujoco(task)
+    with MujocoSimulator() as chunked, MujocoSimulator() as single:
+        single.chunked = False
+        results = [evaluate_design(design, mj, simulator=simulator)
+                   for simulator in (chunked, single)]
+    assert results[0].simulated_time > 0
+    np.testing.assert_array_equal(results[0].world_objectives, results[1].world_objectives)
+    np.testing.assert_array_equal(results[0].final_poses, results[1].final_poses)

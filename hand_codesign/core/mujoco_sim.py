@@ -210,6 +210,7 @@ class MujocoSimulator:
     """A compiled MuJoCo model of one candidate, its data and the rollout loop."""
 
     engine = 'mujoco'
+    chunked = True  # step open-loop torques in C between changes and events (False: one by one)
 
     def __init__(self):
         """Start without a model: `build` compiles one per candidate."""
@@ -246,6 +247,7 @@ class MujocoSimulator:
         # start collisions need the object's geometry only: written into this copy in place
         self._collision_model = self.mj_model
         self._scratch = None  # the PD law's MjData, made on first use
+        self._hold_rows = self._hold_until = None
         self.task, self.model = task, model
         self._joints = model.num_joints
         self._object_body = self.mj_model.body('object').id
@@ -371,29 +373,51 @@ class MujocoSimulator:
         x, y, z, qw, qx, qy, qz = self.mj_data.qpos[start:start + 7].tolist()
         return (x, y, z), (qx, qy, qz, qw)
 
+    def _holds(self, policy, num_steps):
+        """
+        Return until(step): the step up to which the torques of `step` stay the same.
+
+        An open-loop torque policy's rows are known: the loop steps in C (mj_step's nstep)
+        until they change or an event comes, bit for bit the steps one at a time. A PD
+        policy's torques depend on the state: one step at a time.
+        """
+        if not isinstance(policy, TorquePolicy) or not self.chunked:
+            return lambda step: step + 1
+        rows = policy.schedule(num_steps)
+        if self._hold_rows is not rows:
+            until = [num_steps] * num_steps
+            for step in range(num_steps - 2, -1, -1):
+                until[step] = step + 1 if rows[step + 1] != rows[step] else until[step + 1]
+            self._hold_rows, self._hold_until = rows, until
+        return self._hold_until.__getitem__
+
     def _run(self, policy, plan, trace, state, on_frame):
         m, d = self.mj_model, self.mj_data
         if self._scratch is None and not isinstance(policy, TorquePolicy):
             self._scratch = mujoco.MjData(m)
-        torques = mujoco_torques(policy, m, d, plan.num_steps, self._scratch)
+        num_steps = plan.num_steps
+        torques = mujoco_torques(policy, m, d, num_steps, self._scratch)
+        until = self._holds(policy, num_steps)
         joints = self._joints
         applied = d.qfrc_applied
-        step_once = mujoco.mj_step
+        step_many = mujoco.mj_step
         event_steps, event_kinds = plan.steps, plan.kinds
         event = 0
         next_event = event_steps[0]
         start = state.position
         last_pose = (tuple(state.position), tuple(state.orientation))
         unstable = False
-        steps = 0
+        steps = done = 0
         if on_frame is not None:
             on_frame(0, self)
-        for step in range(1, plan.num_steps + 1):
-            applied[:joints] = torques(step - 1)
-            step_once(m, d)
-            if step != next_event:
+        while done < num_steps:
+            applied[:joints] = torques(done)
+            stop = min(until(done), next_event if next_event > 0 else num_steps)
+            step_many(m, d, stop - done)
+            done = stop
+            if done != next_event:
                 continue
-            steps = step
+            steps = done
             kind = event_kinds[event]
             position, orientation = self.object_pose()
             if not self._stable(position, orientation, start, kind & _JOINT_WATCH):
@@ -401,13 +425,13 @@ class MujocoSimulator:
                 break
             last_pose = (position, orientation)
             if kind & _FRAME:
-                on_frame(step, self)
+                on_frame(done, self)
             if kind & _RECORD and trace.record(position, orientation):
                 break
             event += 1
             next_event = event_steps[event]
         else:
-            steps = plan.num_steps
+            steps = num_steps
             position, orientation = self.object_pose()
             if self._stable(position, orientation, start, True):
                 last_pose = (position, orientation)
