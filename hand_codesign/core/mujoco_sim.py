@@ -38,6 +38,10 @@ Settings chosen to match Bullet on this model (one place; measured in test_mujoc
 - Integrator: MuJoCo's semi-implicit Euler, as Bullet's. Not modelled: Bullet's default
   multibody damping (0.04 of the link velocity), small at these speeds.
 
+The rollout loop is core.sim's, with one difference: an open-loop torque policy's torques are
+known in advance, so MuJoCo steps in C (mj_step's nstep) from one torque change or event to
+the next, with no Python per step (test_mujoco_sim checks it is bit for bit the single steps).
+
 Unstable simulation: besides the object and joint checks of core.sim, MuJoCo resets a
 diverging state by itself and counts a warning; a rollout with such a warning is unstable.
 """
