@@ -2,10 +2,13 @@
 
 import dataclasses
 import pathlib
+import types
 
+from hand_codesign.analysis.replay import rollout_poses
 from hand_codesign.core import genome_spec, load_task, Simulator, world_states
 from hand_codesign.core.design import ControllerDesign, FingerDesign, JointDesign
 from hand_codesign.core.evaluate import evaluate, evaluate_design
+from hand_codesign.core.geometry import link_frames
 from hand_codesign.core.hand import hand_model
 from hand_codesign.core.mujoco_sim import MujocoSimulator
 from hand_codesign.core.objectives import COLLISION_PENALTY, goal_schedule
@@ -175,3 +178,20 @@ def test_open_loop_torques_stepped_in_c_are_the_steps_one_at_a_time(task):
     assert results[0].simulated_time > 0
     np.testing.assert_array_equal(results[0].world_objectives, results[1].world_objectives)
     np.testing.assert_array_equal(results[0].final_poses, results[1].final_poses)
+
+
+def test_replay_poses_of_a_mujoco_run_are_mujoco_s(task):
+    mj = on_mujoco(task)
+    spec = genome_spec(mj)
+    generator = np.random.default_rng(4)
+    x = next(x for x in (np.clip(spec.initial_mean() + 0.1 * generator.normal(size=spec.size),
+                                 0, 1) for _ in range(30)) if not evaluate(x, mj).collision)
+    world = world_states(mj)[0]
+    model, palm, frames = rollout_poses(mj, types.SimpleNamespace(x=x), world)
+    final = evaluate(x, mj, worlds=[world]).final_poses[0]
+    # the object rests at the end: the last frame, a few steps before, is where it ends
+    np.testing.assert_allclose(np.concatenate(frames[-1][2]), final, atol=1e-9)
+    _, _, bullet = rollout_poses(task, types.SimpleNamespace(x=x), world)
+    assert not np.allclose(np.concatenate(bullet[-1][2]), final, atol=1e-6)
+    for (position, _), (expected, _) in zip(frames[0][1], link_frames(model, palm)):
+        np.testing.assert_allclose(position, expected, atol=1e-12)

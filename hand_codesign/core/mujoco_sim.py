@@ -463,6 +463,16 @@ class MujocoSimulator:
                 return False
         return True
 
+    def link_poses(self):
+        """Return the world pose (position, quaternion x, y, z, w) of every link frame."""
+        d, first = self.mj_data, self._palm_body + 1
+        mujoco.mj_kinematics(self.mj_model, d)  # from qpos (the next step recomputes it anyway)
+        poses = []
+        for body in range(first, first + self._joints):
+            w, x, y, z = d.xquat[body].tolist()
+            poses.append((tuple(d.xpos[body].tolist()), (x, y, z, w)))
+        return poses
+
     def joint_angles(self):
         """Return the hand's joint angles (rad), in joint order."""
         return self.mj_data.qpos[:self._joints].tolist()

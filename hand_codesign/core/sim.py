@@ -238,6 +238,12 @@ class Simulator:
         """Return the current object's (position, orientation x, y, z, w)."""
         return self.client.getBasePositionAndOrientation(self.object_body)
 
+    def link_poses(self):
+        """Return the world pose (position, quaternion x, y, z, w) of every link frame."""
+        links = self.client.getLinkStates(self.hand, self._joints,
+                                          computeForwardKinematics=True)
+        return [(tuple(link[4]), tuple(link[5])) for link in links]
+
     def touching_links(self, distance):
         """Return the set of the hand's links with a contact point at most `distance` (m)."""
         return {point[3] for point in self.client.getContactPoints(self.hand, self.object_body)
