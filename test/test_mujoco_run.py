@@ -47,6 +47,9 @@ def test_a_run_on_mujoco_records_its_engine_and_evaluations_any_process_recomput
     assert 'simulated with pybullet (the run used mujoco)' in transfer.stdout
     unseen = json.loads((tmp_path / 'report' / 'unseen.json').read_text())
     assert (unseen['engine'], unseen['run_engine']) == ('pybullet', 'mujoco')
+    alone = run_cli('analyze', bag, '--engine', 'pybullet')
+    assert alone.returncode == 2 and alone.stderr.strip().endswith('give --unseen N too')
+    assert len(alone.stderr.strip().splitlines()) == 1
     # the design as MJCF: loads in MuJoCo and starts in the pose of the simulated hand
     exported = run_cli('export', bag, '--out', tmp_path / 'export')
     assert exported.returncode == 0, exported.stderr  # 0: re-simulated on MuJoCo, same bits

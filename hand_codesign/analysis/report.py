@@ -41,6 +41,9 @@ ELITES_LISTED = 10  # the archive's best designs in the terminal and in report.m
 
 def analyze_command(arguments):
     """Write the report folder of a bag; return the exit code."""
+    if getattr(arguments, 'engine', None) and not getattr(arguments, 'unseen', 0):
+        raise UserError('--engine: measures the final design on unseen worlds; give --unseen N '
+                        'too')
     record = records.open_run(arguments.bag)
     out = pathlib.Path(arguments.out) if arguments.out else default_report_dir(record.path)
     report = Report(record)
