@@ -36,7 +36,6 @@ from hand_codesign.core.evaluate import evaluate_design
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.hand import hand_model
 from hand_codesign.core.hand import hand_urdf
-from hand_codesign.core.mujoco_sim import model_mjcf
 from hand_codesign.core.runs import run_task
 from hand_codesign.core.task import parse_design
 from hand_codesign.core.task import TaskError
@@ -192,6 +191,7 @@ def export_design(record, recorded, out):
         name = f'{task.name}_candidate{recorded.candidate_id}'
         urdf_path.write_text(hand_urdf(design.hand, task.hand, name=name, capsules=False),
                              encoding='utf-8')
+        from hand_codesign.core.mujoco_sim import model_mjcf  # see core.evaluate.new_simulator
         (out / MJCF_NAME).write_text(model_mjcf(
             model, task.time_step, task.hand.base_position, task.hand.base_orientation,
             task.policy.gravity_compensation, name), encoding='utf-8')

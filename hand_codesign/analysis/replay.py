@@ -23,10 +23,10 @@ import time
 from hand_codesign.analysis import records
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.evaluate import evaluate_design
+from hand_codesign.core.evaluate import new_simulator
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.geometry import link_frames
 from hand_codesign.core.hand import hand_model
-from hand_codesign.core.mujoco_sim import MujocoSimulator
 from hand_codesign.core.sim import object_shape
 from hand_codesign.core.sim import Simulator
 from hand_codesign.core.worlds import object_state
@@ -239,7 +239,7 @@ def kinematic_frames(task, physical, world, grabber):
     def keep(step, simulator):
         poses.append((step, simulator.joint_angles(), simulator.object_pose()))
 
-    with MujocoSimulator() as other:
+    with new_simulator(task.physics.engine) as other:
         evaluate_design(physical, task, worlds=[world], simulator=other, on_frame=keep,
                         frame_every=frame_every(task))
     state = object_state(task, world)
@@ -275,8 +275,7 @@ def rollout_poses(task, design, world):
         frames.append((step * task.time_step, simulator.link_poses(),
                        (tuple(position), tuple(orientation))))
 
-    engine = MujocoSimulator if task.physics.engine == 'mujoco' else Simulator
-    with engine() as simulator:
+    with new_simulator(task.physics.engine) as simulator:
         evaluate_design(physical, task, worlds=[world], simulator=simulator, on_frame=grab,
                         frame_every=frame_every(task))
     if not frames:

@@ -29,7 +29,6 @@ from typing import Optional, Sequence, Tuple
 
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.hand import hand_model
-from hand_codesign.core.mujoco_sim import MujocoSimulator
 from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
                                            task_torque_penalty, weighted_fitness)
 from hand_codesign.core.outcomes import OutcomeWatch, task_outcomes
@@ -67,15 +66,23 @@ class Evaluation:
 
 
 _SIMULATORS = {}  # engine name -> this process's simulator of that engine
-_ENGINES = {'pybullet': Simulator, 'mujoco': MujocoSimulator}
 
 
 def shared_simulator(engine='pybullet'):
     """Return this process's simulator of `engine` (task.physics.engine), made on first use."""
     simulator = _SIMULATORS.get(engine)
     if simulator is None or simulator.client is None:
-        simulator = _SIMULATORS[engine] = _ENGINES[engine]()
+        simulator = _SIMULATORS[engine] = new_simulator(engine)
     return simulator
+
+
+def new_simulator(engine):
+    """Return a new simulator of `engine`: 'pybullet' (core.sim) or 'mujoco'."""
+    if engine == 'mujoco':
+        # imported on first use: loading MuJoCo costs a process about 0.2 s
+        from hand_codesign.core.mujoco_sim import MujocoSimulator
+        return MujocoSimulator()
+    return Simulator()
 
 
 class _TaskContext:

@@ -23,14 +23,13 @@ Gaussian noise (m, rad) from a seeded generator.
 from dataclasses import dataclass
 import math
 
+from hand_codesign.core.evaluate import new_simulator
 from hand_codesign.core.evaluation_jobs import candidate_task, CandidateRejected
 from hand_codesign.core.hand import hand_model
-from hand_codesign.core.mujoco_sim import MujocoSimulator
 from hand_codesign.core.objectives import goal_schedule, quaternion_multiply
 from hand_codesign.core.physical import design_from_physical
 from hand_codesign.core.policies import make_policy
 from hand_codesign.core.rig import TrialSpec
-from hand_codesign.core.sim import Simulator
 from hand_codesign.core.worlds import ObjectState
 import numpy as np
 
@@ -76,7 +75,7 @@ class SimulatedRig:
         """Return the simulator of this rig's engine (default: the task's)."""
         engine = self.engine or task.physics.engine
         if engine not in self.simulators:
-            self.simulators[engine] = MujocoSimulator() if engine == 'mujoco' else Simulator()
+            self.simulators[engine] = new_simulator(engine)
         return self.simulators[engine]
 
     def run(self, task, design, spec, on_pose):
