@@ -56,6 +56,8 @@ def add_run_arguments(parser):
     parser.add_argument('--iterations', type=int, help='generations per structure')
     parser.add_argument('--popsize', type=int, help='candidates per generation')
     parser.add_argument('--world-states', type=int, help='randomized worlds per candidate')
+    parser.add_argument('--engine', choices=('pybullet', 'mujoco'),
+                        help="physics engine (default: the task file's physics.engine)")
     parser.add_argument('--resume', metavar='BAG', help='continue the run recorded in BAG')
     parser.add_argument('--domain-id', type=domain_id_option, metavar='ID|auto',
                         help="ROS_DOMAIN_ID of the run (default: the environment's, as ROS 2 "
@@ -92,6 +94,8 @@ def add_rig_arguments(parser):
                         help='--rig sim: poses per second (default 0: every physics step)')
     parser.add_argument('--rig-phase', type=float, default=0.0,
                         help='--rig sim: offset of the pose clock, in sample periods')
+    parser.add_argument('--rig-engine', choices=('pybullet', 'mujoco'),
+                        help="--rig sim: the rig's physics engine (default: the run's)")
 
 
 def add_check_arguments(parser):
@@ -133,6 +137,9 @@ def add_bag_arguments(verb, parser):
         parser.add_argument('--unseen', type=int, default=0, metavar='N',
                             help='also measure the best design on N worlds it never trained '
                                  'on, as `reproduce` does (e.g. 1000; default: skip)')
+        parser.add_argument('--engine', choices=('pybullet', 'mujoco'),
+                            help='with --unseen: the physics engine to measure in '
+                                 "(default: the run's)")
     elif verb == 'replay':
         parser.add_argument('--generation', type=int, help='generation (default: the best)')
         parser.add_argument('--rank', type=int, default=0,

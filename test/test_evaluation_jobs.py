@@ -8,7 +8,7 @@ from hand_codesign.core.evaluation_jobs import CandidateRejected
 from hand_codesign.core.evaluation_jobs import evaluation_job
 from hand_codesign.core.evaluation_jobs import EvaluatorInbox
 from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.runs import engine_version, load_run_task
 from hand_codesign.core.worlds import world_states
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import RunInfo
@@ -119,3 +119,22 @@ def test_a_candidate_waits_for_its_run_info_then_is_rejected_without_it(run):
     assert inbox.orphans() == [lost]
     with pytest.raises(CandidateRejected, match='no RunInfo received for run "run-without'):
         inbox.job(lost)
+
+
+def test_the_run_info_names_the_engine_and_an_evaluator_with_another_version_refuses(run):
+    run_info, task = run
+    mujoco_run = RunInfo(run_id='run-1', task_yaml=task.source_text, seed=task.seed,
+                         iterations=3, population=6, world_states=3, engine='mujoco',
+                         engine_version=engine_version('mujoco'))
+    job = evaluation_job(mujoco_run, candidate())
+    assert job.task.physics.engine == 'mujoco'
+    assert evaluation_job(run_info, candidate()).task.physics.engine == 'pybullet'
+    other = RunInfo(run_id='run-1', task_yaml=task.source_text, engine='mujoco',
+                    engine_version='mujoco==3.3.0')
+    with pytest.raises(CandidateRejected) as refused:
+        evaluation_job(other, candidate())
+    assert str(refused.value) == (f'run run-1 simulates with mujoco==3.3.0; this evaluator has '
+                                  f'{engine_version("mujoco")}: results would differ')
+    with pytest.raises(CandidateRejected, match="physics engine 'ode'"):
+        evaluation_job(RunInfo(run_id='run-1', task_yaml=task.source_text, engine='ode'),
+                       candidate())

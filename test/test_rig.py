@@ -7,6 +7,7 @@ the interpolation tolerance that core.rig derives; timeouts, failures and lost t
 a candidate with the reason, and a start collision charges the collision penalty.
 """
 
+import dataclasses
 import pathlib
 import xml.etree.ElementTree as ElementTree
 
@@ -36,10 +37,10 @@ def rebuilt(task, x):
                                 physical.kp, physical.kd)
 
 
-def rig_evaluation(task, x, clock=SampleClock(), **limits):
+def rig_evaluation(task, x, clock=SampleClock(), engine='', **limits):
     """Return the outcome of RigTrials on a SimulatedRig, as the nodes exchange it."""
     design = rebuilt(task, x)
-    rig = SimulatedRig(clock)
+    rig = SimulatedRig(clock, engine=engine)
     trials = RigTrials(task, design, **limits)
     try:
         while True:
@@ -91,6 +92,16 @@ def test_every_step_measured_gives_the_simulated_objectives_exactly():
         np.testing.assert_array_equal(action[1].objectives, simulated.objectives)
         np.testing.assert_array_equal(action[1].world_objectives, simulated.world_objectives)
     assert 0 < collisions < 4   # both outcomes were compared
+
+
+def test_a_rig_on_the_other_engine_measures_that_engine_s_physics():
+    task = load_task(TASKS / 'task5.yaml').replace(num_world_states=3)
+    on_mujoco = task.replace(physics=dataclasses.replace(task.physics, engine='mujoco'))
+    x = next(x for x in genomes(task, 6, 1) if not evaluate(x, task).collision)
+    action, _ = rig_evaluation(task, x, engine='mujoco')  # a PyBullet run, a MuJoCo rig
+    assert action[0] == 'evaluated'
+    np.testing.assert_array_equal(action[1].objectives, evaluate(x, on_mujoco).objectives)
+    assert not np.array_equal(action[1].objectives, evaluate(x, task).objectives)
 
 
 def test_sampled_at_100_hz_within_the_derived_tolerance():

@@ -72,6 +72,7 @@ def test_the_signed_bytes_are_those_the_msg_comment_spells():
     run_bytes = (string('hand_codesign_msgs/msg/RunInfo') + string('r') + string('t')
                  + string('') + struct.pack('<Q', 0) + string('') + struct.pack('<QQQ', 0, 0, 0)
                  + struct.pack('<I', 0) * 2 + string('')
+                 + string('') * 2  # engine, engine_version
                  + struct.pack('<I', 32) + b''.join(struct.pack('<Q', b) for b in summary_key))
     candidate_bytes = (
         string('hand_codesign_msgs/msg/Candidate') + string('r') + struct.pack('<QQ', 1, 2)

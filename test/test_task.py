@@ -86,6 +86,9 @@ def test_physics_defaults_are_table_one_and_a_section_overrides_them(tmp_path):
     document['physics'] = {'solver_iterations': 5}
     task = load_task(write_task(tmp_path, document, 'fast.yaml'))
     assert task.physics == PhysicsSpec(solver_iterations=5, contact_breaking_threshold=0.02)
+    document['physics'] = {'engine': 'mujoco'}
+    task = load_task(write_task(tmp_path, document, 'mujoco.yaml'))
+    assert task.physics == PhysicsSpec(engine='mujoco')
 
 
 def test_worlds_default_to_the_mean_on_fixed_worlds_and_a_section_sets_them(tmp_path):
@@ -221,6 +224,8 @@ BAD_VALUES = [
     ('physics', {'contact_breaking_threshold': -0.01}, 'physics.contact_breaking_threshold: '
      'expected a positive number, got -0.01'),
     ('physics', {'substeps': 2}, 'physics.substeps: expected no such key'),
+    ('physics', {'engine': 'ode'}, 'physics.engine: expected one of pybullet, mujoco, '
+     "got 'ode'"),
     ('worlds', {'aggregate': 'worst'}, 'worlds.fraction: expected this key with aggregate: '
      'worst'),
     ('worlds', {'aggregate': 'worst', 'fraction': 0}, 'worlds.fraction: expected a fraction '

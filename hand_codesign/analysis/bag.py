@@ -86,6 +86,8 @@ class RunInfo:
     resumed_from: str
     stamp: int          # ns since the epoch, from the message
     log_time: int       # ns since the epoch, when the recorder received it
+    engine: str = ''    # physics engine ('' in a bag older than the field: the task file's)
+    engine_version: str = ''
 
     def task(self, structure=None, source='bag:run_info', world_states=None, horizon=None,
              stage=0, held_out=False, world_draw=0):
@@ -101,7 +103,7 @@ class RunInfo:
                         iterations=self.iterations, population=self.population,
                         world_states=world_states or self.world_states, structure=structure,
                         horizon=horizon, stage=stage, held_out=held_out,
-                        world_draw=world_draw)
+                        world_draw=world_draw, engine=self.engine)
 
 
 class Table:
@@ -479,6 +481,8 @@ def _run_info(table, index):
         resumed_from=str(row.get('resumed_from', '')),
         stamp=int(row.get('stamp', 0)),
         log_time=int(row['log_time']),
+        engine=str(row.get('engine', '')),
+        engine_version=str(row.get('engine_version', '')),
     )
 
 

@@ -612,21 +612,28 @@ def band_lines(bands, tolerance):
     return lines
 
 
-def unseen_report(bag, count, processes=1):
+def unseen_report(bag, count, processes=1, engine=None):
     """
     Return (Markdown lines, JSON record) of a run's best design on `count` unseen worlds.
+
+    `engine` ('pybullet' or 'mujoco') measures it in that physics engine instead of the run's
+    (a design's transfer to the other engine).
 
     The same measures as a reproduce campaign's: for each error of the task's goals
     (unseen_tolerances) the share of worlds within 5 mm or 0.1 rad, its median and p90, and
     whether the design found its joint limits (core.measures) on the error its goals score.
     """
     task, x, structure = final_design(bag)
+    found_in = task.physics.engine
+    if engine:
+        task = task.replace(physics=dataclasses.replace(task.physics, engine=engine))
     worlds = unseen_world_states(task, count)
     measures = measure_worlds(x, task, worlds, processes)
     summaries = [summarize(measures, tolerance) for tolerance in unseen_tolerances(task)]
     lines = [f'## On {count} unseen worlds', '',
              f'The best design (structure {list(structure)}) on {count} worlds drawn from '
-             f'another stream of seed {task.seed} than the training worlds.', '',
+             f'another stream of seed {task.seed} than the training worlds, simulated with '
+             f'{task.physics.engine} (the run used {found_in}).', '',
              '| error | within | median | p90 | median at the start |', '|---|---|---|---|---|']
     for summary in summaries:
         tolerance = summary.tolerance
@@ -648,6 +655,7 @@ def unseen_report(bag, count, processes=1):
     bands = world_bands(task, worlds, measures, scored)
     lines += band_lines(bands, scored)
     record = {'bag': str(bag), 'seed': task.seed, 'unseen_worlds': count,
+              'engine': task.physics.engine, 'run_engine': found_in,
               'summaries': [summary.as_dict() for summary in summaries],
               'bands': {'tolerance': dataclasses.asdict(scored), 'quantities': bands}}
     return lines, record

@@ -13,6 +13,8 @@ DIR receives:
   capsule is written as what it is, a cylinder and a sphere at each end; the file loads in
   PyBullet, yourdfpy and other URDF tools (in PyBullet pass URDF_USE_IMPLICIT_CYLINDER, or it
   turns cylinders into meshes). URDF has no initial joint angles: they are in the YAML.
+- `hand.xml`: the same hand on the ground as MJCF, as core.mujoco_sim builds it for MuJoCo
+  (capsules, limits, contact settings); its keyframe `initial` holds the initial angles.
 - `controller.yaml`: everything to rebuild and re-simulate the design without the bag:
   `controller` (the policy as a person reads it: kind, timing, values per joint name,
   initial joint angles), `design` (hand and controller in physical units, in the format of a
@@ -44,6 +46,7 @@ import yaml
 
 FORMAT = 'hand_codesign export 1'
 URDF_NAME = 'hand.urdf'
+MJCF_NAME = 'hand.xml'
 YAML_NAME = 'controller.yaml'
 
 
@@ -155,7 +158,7 @@ _Dumper.add_representer(_Literal, _literal)
 
 
 def export_design(record, recorded, out):
-    """Write hand.urdf and controller.yaml of a RecordedDesign into out; return both paths."""
+    """Write hand.urdf, hand.xml, controller.yaml of a RecordedDesign; return (urdf, yaml)."""
     task = records.design_task(record, recorded)
     design = genome_spec(task).decode(recorded.x)
     model = hand_model(design.hand, task.hand)
@@ -169,7 +172,8 @@ def export_design(record, recorded, out):
         'urdf': URDF_NAME,
         'controller': controller_document(task, design, joint_names),
         'design': design_document(design),
-        'task': {'name': task.name, 'seed': int(task.seed), 'iterations': task.iterations,
+        'task': {'name': task.name, 'engine': task.physics.engine,
+                 'seed': int(task.seed), 'iterations': task.iterations,
                  'population': task.population, 'world_states': task.num_world_states,
                  'structure': [int(joints) for joints in task.structure],
                  # lines ending in spaces cannot be block literals; a rare task file has them
@@ -186,9 +190,13 @@ def export_design(record, recorded, out):
     try:
         out.mkdir(parents=True, exist_ok=True)
         urdf_path = out / URDF_NAME
-        urdf_path.write_text(hand_urdf(
-            design.hand, task.hand, name=f'{task.name}_candidate{recorded.candidate_id}',
-            capsules=False), encoding='utf-8')
+        name = f'{task.name}_candidate{recorded.candidate_id}'
+        urdf_path.write_text(hand_urdf(design.hand, task.hand, name=name, capsules=False),
+                             encoding='utf-8')
+        from hand_codesign.core.mujoco_sim import model_mjcf  # see core.evaluate.new_simulator
+        (out / MJCF_NAME).write_text(model_mjcf(
+            model, task.time_step, task.hand.base_position, task.hand.base_orientation,
+            task.policy.gravity_compensation, name), encoding='utf-8')
         yaml_path = out / YAML_NAME
         header = (f'# {task.name}: candidate {recorded.candidate_id} of run {record.run_id}, '
                   f'exported by hand-codesign export.\n# The hand is {URDF_NAME}; values are '
@@ -264,7 +272,8 @@ def load_export(folder):
                         int(task_document.get('iterations') or 0),
                         int(task_document.get('population') or 0),
                         int(task_document.get('world_states') or 0),
-                        task_document.get('structure'))
+                        task_document.get('structure'),
+                        engine=str(task_document.get('engine') or ''))
     except (TaskError, ValueError, TypeError) as error:
         raise UserError(f'{path}: task: cannot rebuild the task: {error}') from None
     try:

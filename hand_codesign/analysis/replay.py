@@ -23,6 +23,7 @@ import time
 from hand_codesign.analysis import records
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.evaluate import evaluate_design
+from hand_codesign.core.evaluate import new_simulator
 from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.geometry import link_frames
 from hand_codesign.core.hand import hand_model
@@ -213,6 +214,8 @@ def render_frames(task, design, world):
     """Return the RGB frames of one world's rollout of a RecordedDesign, from the camera."""
     physical = genome_spec(task).decode(design.x)
     grabber = FrameGrabber(task)
+    if task.physics.engine != 'pybullet':
+        return kinematic_frames(task, physical, world, grabber)
     with Simulator(rendering=True) as simulator:
         evaluation = evaluate_design(physical, task, worlds=[world], simulator=simulator,
                                      on_frame=grabber, frame_every=frame_every(task))
@@ -222,6 +225,35 @@ def render_frames(task, design, world):
             simulator.create_object(state, object_shape(simulator.client, state,
                                                         task.object_spec.shape))
             grabber(0, simulator)
+    return grabber.frames
+
+
+def kinematic_frames(task, physical, world, grabber):
+    """
+    Return the frames of a rollout simulated in another engine, drawn by PyBullet's camera.
+
+    The other engine simulates; PyBullet only poses the same hand and object at its joint
+    angles and object poses, frame by frame, and renders them.
+    """
+    poses = []
+
+    def keep(step, simulator):
+        poses.append((step, simulator.joint_angles(), simulator.object_pose()))
+
+    with new_simulator(task.physics.engine) as other:
+        evaluate_design(physical, task, worlds=[world], simulator=other, on_frame=keep,
+                        frame_every=frame_every(task))
+    state = object_state(task, world)
+    with Simulator(rendering=True) as simulator:
+        simulator.build(task, hand_model(physical.hand, task.hand))
+        body = simulator.create_object(state, object_shape(simulator.client, state,
+                                                           task.object_spec.shape))
+        for step, angles, (position, orientation) in poses or [(0, None, None)]:
+            if angles is not None:
+                for joint, angle in enumerate(angles):
+                    simulator.client.resetJointState(simulator.hand, joint, angle)
+                simulator.client.resetBasePositionAndOrientation(body, position, orientation)
+            grabber(step, simulator)
     return grabber.frames
 
 
@@ -240,15 +272,11 @@ def rollout_poses(task, design, world):
     frames = []
 
     def grab(step, simulator):
-        client = simulator.client
-        links = client.getLinkStates(simulator.hand, list(range(model.num_joints)),
-                                     computeForwardKinematics=True)
-        position, orientation = client.getBasePositionAndOrientation(simulator.object_body)
-        frames.append((step * task.time_step,
-                       [(tuple(link[4]), tuple(link[5])) for link in links],
+        position, orientation = simulator.object_pose()
+        frames.append((step * task.time_step, simulator.link_poses(),
                        (tuple(position), tuple(orientation))))
 
-    with Simulator() as simulator:
+    with new_simulator(task.physics.engine) as simulator:
         evaluate_design(physical, task, worlds=[world], simulator=simulator, on_frame=grab,
                         frame_every=frame_every(task))
     if not frames:

@@ -48,6 +48,9 @@ ELITES_LISTED = 10  # the archive's best designs in the terminal and in report.m
 
 def analyze_command(arguments):
     """Write the report folder of a bag; return the exit code."""
+    if getattr(arguments, 'engine', None) and not getattr(arguments, 'unseen', 0):
+        raise UserError('--engine: measures the final design on unseen worlds; give --unseen N '
+                        'too')
     record = records.open_run(arguments.bag)
     out = pathlib.Path(arguments.out) if arguments.out else default_report_dir(record.path)
     report = Report(record)
@@ -55,18 +58,19 @@ def analyze_command(arguments):
         files = report.write(folder)
         print(report.summary_text())
         if getattr(arguments, 'unseen', 0):
-            files += write_unseen(record.path, folder, arguments.unseen)
+            files += write_unseen(record.path, folder, arguments.unseen,
+                                  getattr(arguments, 'engine', None))
     print(f'report: {out} ({", ".join(sorted(path.name for path in files))})')
     return 0
 
 
-def write_unseen(bag, out, count):
-    """Measure the best design on `count` unseen worlds; add unseen.md/.json; print it."""
+def write_unseen(bag, out, count, engine=None):
+    """Measure the best design on `count` unseen worlds (in `engine`: default the run's)."""
     import json
     from hand_codesign.analysis.campaign import unseen_report
     if count < 1:
         raise UserError(f'--unseen: expected a positive number of worlds, got {count}')
-    lines, values = unseen_report(bag, count, processes=2)
+    lines, values = unseen_report(bag, count, processes=2, engine=engine)
     paths = [out / 'unseen.md', out / 'unseen.json']
     paths[0].write_text('\n'.join(lines) + '\n', encoding='utf-8')
     paths[1].write_text(json.dumps(values, indent=2) + '\n', encoding='utf-8')

@@ -161,7 +161,7 @@ def optimizer_parameters(arguments, task, bag):
         parameters.update({
             'task_file': pathlib.Path(arguments.task).resolve(), 'seed': task.seed,
             'iterations': task.iterations, 'population': task.population,
-            'world_states': task.num_world_states})
+            'world_states': task.num_world_states, 'engine': task.physics.engine})
     return parameters
 
 
@@ -170,7 +170,10 @@ def rig_parameters(arguments):
     if arguments.rig_rate < 0 or not 0 <= arguments.rig_phase <= 1:
         raise UserError(f'--rig-rate {arguments.rig_rate} / --rig-phase {arguments.rig_phase}: '
                         'expected a rate >= 0 (0: every physics step) and a phase in [0, 1]')
-    return {'rate': float(arguments.rig_rate), 'phase': float(arguments.rig_phase)}
+    parameters = {'rate': float(arguments.rig_rate), 'phase': float(arguments.rig_phase)}
+    if getattr(arguments, 'rig_engine', None):  # rcl refuses an empty value
+        parameters['engine'] = arguments.rig_engine
+    return parameters
 
 
 @contextlib.contextmanager
@@ -215,15 +218,17 @@ def check_arguments(arguments):
                             f'got {value}')
     try:
         return load_run_task(arguments.task, arguments.seed, arguments.iterations,
-                             arguments.popsize, arguments.world_states)
+                             arguments.popsize, arguments.world_states,
+                             getattr(arguments, 'engine', None))
     except TaskError as error:
         raise UserError(str(error))
 
 
 def resumed_task(arguments):
     """Return the Task of the interrupted run in --resume's bag; it fixes task and budget."""
-    given = [flag for flag in ('task', 'seed', 'iterations', 'popsize', 'world_states')
-             if getattr(arguments, flag) is not None]
+    given = [flag for flag in ('task', 'seed', 'iterations', 'popsize', 'world_states',
+                               'engine')
+             if getattr(arguments, flag, None) is not None]
     if given:
         raise UserError('--resume takes the task, seed and budget from the bag; drop '
                         + ', '.join('--' + flag.replace('_', '-') for flag in given))

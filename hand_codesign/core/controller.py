@@ -43,7 +43,7 @@ from hand_codesign.core.geometry import design_shapes
 from hand_codesign.core.outcomes import Answer
 from hand_codesign.core.outcomes import objectives_of
 from hand_codesign.core.physical import candidate_design
-from hand_codesign.core.runs import library_versions
+from hand_codesign.core.runs import engine_version, library_versions
 from hand_codesign.core.search import Search
 from hand_codesign.core.summary import generation_summary
 from hand_codesign.core.summary import progress_line
@@ -101,7 +101,9 @@ class RunController:
             'seed': task.seed, 'algorithm': task.algorithm, 'iterations': task.iterations,
             'population': task.population, 'world_states': task.num_world_states,
             'objective_names': list(task.objective_names), 'versions': library_versions(),
-            'resumed_from': self.resumed.run_id if self.resumed is not None else ''}
+            'resumed_from': self.resumed.run_id if self.resumed is not None else '',
+            'engine': task.physics.engine,
+            'engine_version': engine_version(task.physics.engine)}
 
     def describe(self):
         """Return the line announcing the run."""

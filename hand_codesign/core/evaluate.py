@@ -33,7 +33,7 @@ from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, go
                                            task_torque_penalty, weighted_fitness)
 from hand_codesign.core.outcomes import OutcomeWatch, task_outcomes
 from hand_codesign.core.policies import make_policy
-from hand_codesign.core.sim import object_shape, Simulator
+from hand_codesign.core.sim import Simulator
 from hand_codesign.core.worlds import object_state, world_states
 import numpy as np
 
@@ -65,15 +65,24 @@ class Evaluation:
     outcomes: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
-_SIMULATOR = None
+_SIMULATORS = {}  # engine name -> this process's simulator of that engine
 
 
-def shared_simulator():
-    """Return this process's Simulator (created on first use)."""
-    global _SIMULATOR
-    if _SIMULATOR is None or _SIMULATOR.client is None:
-        _SIMULATOR = Simulator()
-    return _SIMULATOR
+def shared_simulator(engine='pybullet'):
+    """Return this process's simulator of `engine` (task.physics.engine), made on first use."""
+    simulator = _SIMULATORS.get(engine)
+    if simulator is None or simulator.client is None:
+        simulator = _SIMULATORS[engine] = new_simulator(engine)
+    return simulator
+
+
+def new_simulator(engine):
+    """Return a new simulator of `engine`: 'pybullet' (core.sim) or 'mujoco'."""
+    if engine == 'mujoco':
+        # imported on first use: loading MuJoCo costs a process about 0.2 s
+        from hand_codesign.core.mujoco_sim import MujocoSimulator
+        return MujocoSimulator()
+    return Simulator()
 
 
 class _TaskContext:
@@ -136,13 +145,14 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     """
     Return the Evaluation of a Design on `task`.
 
-    `simulator` defaults to the process-wide one. For replay: `on_world(index, simulator)`
-    is called before each world's rollout and `on_frame(step, simulator)` at its frames
-    (see Simulator.rollout).
+    `simulator` defaults to the process-wide one of the task's engine (physics.engine). For
+    replay: `on_world(index, simulator)` is called before each world's rollout and
+    `on_frame(step, simulator)` at its frames (see Simulator.rollout).
     """
     context = _TaskContext.of(task)
     states, initial = context.objects(worlds)
-    simulator = shared_simulator() if simulator is None else simulator
+    if simulator is None:
+        simulator = shared_simulator(task.physics.engine)
     schedule = context.schedule
     model = hand_model(design.hand, task.hand)
     policy = make_policy(task.policy, design.controller, model.initial_angles,
@@ -150,7 +160,7 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     peak = design.controller.values if task.policy.kind == 'torque' else ()
     penalty = task_torque_penalty(task, peak)
     simulator.build(task, model)
-    objects = [(state, object_shape(simulator.client, state, task.object_spec.shape))
+    objects = [(state, simulator.object_shape(state, task.object_spec.shape))
                for state in states]
     num_objectives = schedule.num_objectives
     watch = OutcomeWatch(context.outcome_names, len(states))

@@ -22,7 +22,7 @@ import time
 from typing import Optional, Sequence
 
 from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.runs import run_task
+from hand_codesign.core.runs import engine_version, run_task
 from hand_codesign.core.signing import run_digest
 import numpy as np
 
@@ -62,13 +62,24 @@ def _world_draw(candidate):
     return int(getattr(candidate, 'world_draw', 0))
 
 
+def check_engine(run):
+    """Raise CandidateRejected if run's physics engine (RunInfo) is not this process's."""
+    engine = getattr(run, 'engine', '')  # '' from a sender older than the field
+    wanted = getattr(run, 'engine_version', '')
+    if engine and wanted and engine_version(engine) != wanted:
+        raise CandidateRejected(f'run {run.run_id} simulates with {wanted}; this evaluator has '
+                                f'{engine_version(engine)}: results would differ')
+
+
 def candidate_task(run, candidate):
     """Return (Task, GenomeSpec) a candidate of run is evaluated with; CandidateRejected."""
+    check_engine(run)
     try:
         task = run_task(run.task_yaml, f'run {run.run_id} task', run.seed, run.iterations,
                         run.population, candidate.world_states or run.world_states,
                         tuple(candidate.structure) or None, candidate.horizon,
-                        _stage(candidate), _held_out(candidate), _world_draw(candidate))
+                        _stage(candidate), _held_out(candidate), _world_draw(candidate),
+                        getattr(run, 'engine', ''))
         return task, genome_spec(task)
     except ValueError as error:
         raise CandidateRejected(f'unusable structure or task: {error}')

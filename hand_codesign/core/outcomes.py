@@ -45,8 +45,7 @@ def touching_links(simulator):
     """Return the set of the hand's links that touch the current object."""
     if simulator.object_body is None:
         return set()
-    return {point[3] for point in simulator.client.getContactPoints(
-        simulator.hand, simulator.object_body) if point[8] <= CONTACT_DISTANCE}
+    return simulator.touching_links(CONTACT_DISTANCE)
 
 
 def resting_on_limit_touching(simulator):
@@ -67,11 +66,11 @@ def resting_on_reached_limit_touching(simulator):
 
 def _finger_on_limit_touching(simulator, rests_on_limit):
     """Return True if a finger touches the object while rests_on_limit(link, angle) holds."""
-    client, hand, links = simulator.client, simulator.hand, simulator.model.links
+    links = simulator.model.links
     if simulator.object_body is None or not links:
         return False
     touching = touching_links(simulator)
-    angles = [state[0] for state in client.getJointStates(hand, list(range(len(links))))]
+    angles = simulator.joint_angles()
     for finger in fingers(links):
         on_limit = any(rests_on_limit(links[index], angles[index]) for index in finger)
         if on_limit and touching.intersection(finger):

@@ -16,7 +16,8 @@ from typing import Tuple
 import numpy as np
 
 RUN_FIELDS = ('run_id', 'task_name', 'task_yaml', 'seed', 'algorithm', 'iterations',
-              'population', 'world_states', 'objective_names', 'versions', 'resumed_from')
+              'population', 'world_states', 'objective_names', 'versions', 'resumed_from',
+              'engine', 'engine_version')
 
 
 @dataclass(frozen=True)

@@ -2,40 +2,61 @@
 The task a run actually used: the task file's text plus the run's overrides.
 
 A run records the task file's text as loaded and, apart from it, the values its command line
-overrode (seed, budget, world states). Every process that needs the run's task (evaluators,
+overrode (seed, budget, world states, physics engine: RunInfo.engine, with the engine's
+version in RunInfo.engine_version). Every process that needs the run's task (evaluators,
 replay, analysis, resume) rebuilds it with `run_task`, so they all agree on it exactly.
 """
 
+import dataclasses
+import functools
+
 from hand_codesign.core.task import load_task
 from hand_codesign.core.task import parse_task
+from hand_codesign.core.task_spec import ENGINES
 
 VERSIONED_PACKAGES = ['hand_codesign', 'pybullet', 'cma', 'deap', 'numpy']
 
 
 def run_task(task_yaml, source, seed, iterations, population, world_states, structure=None,
-             horizon=None, stage=0, held_out=False, world_draw=0):
+             horizon=None, stage=0, held_out=False, world_draw=0, engine=''):
     """Return the Task of a run from its task text and overrides (0 or None keeps the file's)."""
     return with_overrides(parse_task(task_yaml, source=source), seed, iterations, population,
-                          world_states, structure, horizon, stage, held_out, world_draw)
+                          world_states, structure, horizon, stage, held_out, world_draw, engine)
 
 
-def load_run_task(path, seed=None, iterations=None, population=None, world_states=None):
+def load_run_task(path, seed=None, iterations=None, population=None, world_states=None,
+                  engine=None):
     """Return the Task a run of the task file at path uses (None keeps the file's values)."""
     task = load_task(path)
     return with_overrides(task, task.seed if seed is None else seed, iterations, population,
-                          world_states)
+                          world_states, engine=engine)
+
+
+@functools.lru_cache(maxsize=None)
+def engine_version(engine):
+    """Return 'name==version' of a physics engine ('pybullet' or 'mujoco') of this process."""
+    import importlib.metadata  # see library_versions
+    try:
+        return f'{engine}=={importlib.metadata.version(engine)}'
+    except importlib.metadata.PackageNotFoundError:
+        return f'{engine}==unknown'
 
 
 def with_overrides(task, seed, iterations, population, world_states, structure=None,
-                   horizon=None, stage=0, held_out=False, world_draw=0):
+                   horizon=None, stage=0, held_out=False, world_draw=0, engine=''):
     """
     Return task with a run's overrides applied (0 or None keeps the task's value).
 
     `horizon` (s) is a candidate's sub-problem (Candidate.horizon, core.horizon); `stage` and
     `held_out` are a candidate's stage and world stream (Candidate.stage, held_out_worlds);
-    `world_draw` its resampled worlds (Candidate.world_draw; 0: the run's fixed worlds).
+    `world_draw` its resampled worlds (Candidate.world_draw; 0: the run's fixed worlds);
+    `engine` the run's physics engine (RunInfo.engine; '' or None: the task file's).
     """
     changes = {'seed': int(seed)}
+    if engine and engine not in ENGINES:
+        raise ValueError(f'physics engine {engine!r}: expected one of {", ".join(ENGINES)}')
+    if engine:
+        changes['physics'] = dataclasses.replace(task.physics, engine=engine)
     if iterations:
         changes['iterations'] = int(iterations)
     if population:

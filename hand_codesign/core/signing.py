@@ -57,7 +57,7 @@ SIGNED_FIELDS = {
         ('run_id', 's'), ('task_name', 's'), ('task_yaml', 's'), ('seed', 'u'),
         ('algorithm', 's'), ('iterations', 'u'), ('population', 'u'), ('world_states', 'u'),
         ('objective_names', 's[]'), ('versions', 's[]'), ('resumed_from', 's'),
-        ('summary_key', 'u[]')),
+        ('engine', 's'), ('engine_version', 's'), ('summary_key', 'u[]')),
     CANDIDATE_TYPE: (
         ('run_id', 's'), ('generation', 'u'), ('candidate_id', 'u'), ('evaluator_id', 's'),
         ('attempt', 'u'), ('structure', 'u[]'), ('world_states', 'u'), ('horizon', 'f'),

@@ -135,6 +135,8 @@ class EventPlan:
 class Simulator:
     """A PyBullet client with the scene of one candidate and the rollout loop."""
 
+    engine = 'pybullet'
+
     def __init__(self, rendering=False):
         with c_output_silenced():
             self.client = Client(connection_mode=pybullet.DIRECT)
@@ -214,6 +216,10 @@ class Simulator:
                 return True
         return False
 
+    def object_shape(self, state, shape):
+        """Return the collision shape id of a world's object (ObjectState, task shape name)."""
+        return object_shape(self.client, state, shape)
+
     def create_object(self, state, shape):
         """
         Create the object of one world (an ObjectState) from its collision shape.
@@ -227,6 +233,25 @@ class Simulator:
         self.client.changeDynamics(body, -1, lateralFriction=state.friction)
         self.object_body = body
         return body
+
+    def object_pose(self):
+        """Return the current object's (position, orientation x, y, z, w)."""
+        return self.client.getBasePositionAndOrientation(self.object_body)
+
+    def link_poses(self):
+        """Return the world pose (position, quaternion x, y, z, w) of every link frame."""
+        links = self.client.getLinkStates(self.hand, self._joints,
+                                          computeForwardKinematics=True)
+        return [(tuple(link[4]), tuple(link[5])) for link in links]
+
+    def touching_links(self, distance):
+        """Return the set of the hand's links with a contact point at most `distance` (m)."""
+        return {point[3] for point in self.client.getContactPoints(self.hand, self.object_body)
+                if point[8] <= distance}
+
+    def joint_angles(self):
+        """Return the hand's joint angles (rad), in joint order."""
+        return [state[0] for state in self.client.getJointStates(self.hand, self._joints)]
 
     def remove_object(self):
         """Remove the current world's object (the scene is back to ground and hand)."""

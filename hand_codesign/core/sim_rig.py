@@ -1,5 +1,9 @@
 """
-A test rig in PyBullet: the stand-in for a built hand, for tests and demos.
+A simulated test rig: the stand-in for a built hand, for tests and demos.
+
+It simulates with the run's physics engine, or with the other one (`engine`): a rig on
+MuJoCo measuring designs found on PyBullet shows a real gap between two physics in the
+rig's prediction-against-measurement report.
 
 It builds the requested hand with the core's own builder (`hand_model`, `Simulator.build`) from
 a Candidate's physical values (`core.physical.design_from_physical`), never from the genome,
@@ -19,13 +23,13 @@ Gaussian noise (m, rad) from a seeded generator.
 from dataclasses import dataclass
 import math
 
+from hand_codesign.core.evaluate import new_simulator
 from hand_codesign.core.evaluation_jobs import candidate_task, CandidateRejected
 from hand_codesign.core.hand import hand_model
 from hand_codesign.core.objectives import goal_schedule, quaternion_multiply
 from hand_codesign.core.physical import design_from_physical
 from hand_codesign.core.policies import make_policy
 from hand_codesign.core.rig import TrialSpec
-from hand_codesign.core.sim import object_shape, Simulator
 from hand_codesign.core.worlds import ObjectState
 import numpy as np
 
@@ -55,15 +59,24 @@ def rig_task(task):
 class SimulatedRig:
     """Run trials of physical designs in PyBullet; see the module doc."""
 
-    def __init__(self, clock=SampleClock(), noise=(0.0, 0.0), seed=0):
-        self.simulator = Simulator()
+    def __init__(self, clock=SampleClock(), noise=(0.0, 0.0), seed=0, engine=''):
+        self.engine = engine  # 'pybullet' or 'mujoco'; '' the run's
+        self.simulators = {}
         self.clock = clock
         self.noise = tuple(float(n) for n in noise)
         self.random = np.random.default_rng(seed)
 
     def close(self):
-        """Disconnect the physics client."""
-        self.simulator.close()
+        """Close the simulators."""
+        for simulator in self.simulators.values():
+            simulator.close()
+
+    def simulator(self, task):
+        """Return the simulator of this rig's engine (default: the task's)."""
+        engine = self.engine or task.physics.engine
+        if engine not in self.simulators:
+            self.simulators[engine] = new_simulator(engine)
+        return self.simulators[engine]
 
     def run(self, task, design, spec, on_pose):
         """
@@ -80,17 +93,16 @@ class SimulatedRig:
         state = ObjectState(position=tuple(spec.position), orientation=tuple(spec.orientation),
                             scale=spec.scale, mass=spec.mass, friction=spec.friction,
                             size=tuple(spec.size))
-        simulator = self.simulator
+        simulator = self.simulator(task)
         simulator.build(task, model)
-        shape = object_shape(simulator.client, state, spec.shape)
+        shape = simulator.object_shape(state, spec.shape)
         if simulator.start_collisions([(state, shape)]):
             return 'collision'
         samples = self.clock.steps(task.time_step, simulator.plan(schedule).num_steps)
 
         def on_frame(step, sim):
             if step in samples:
-                position, orientation = sim.client.getBasePositionAndOrientation(
-                    sim.object_body)
+                position, orientation = sim.object_pose()
                 on_pose(step * task.time_step, *self._noisy(position, orientation))
 
         result = simulator.rollout(state, shape, policy, schedule, on_frame, 1)

@@ -16,8 +16,8 @@ from hand_codesign.core.design import (ControllerDesign, Design, FingerDesign, H
 from hand_codesign.core.rotations import axis_angle_quaternion
 from hand_codesign.core.task_checks import check_task
 from hand_codesign.core.task_spec import (ALGORITHMS, ARCHIVE_DESCRIPTOR_NAMES, ArchiveSpec,
-                                          AXES, Bounds, DISTANCES,
-                                          EarlyTerminationSpec, GoalSpec, HandSpec, HierarchySpec,
+                                          AXES, Bounds, DISTANCES, EarlyTerminationSpec,
+                                          ENGINES, GoalSpec, HandSpec, HierarchySpec,
                                           HorizonSpec, MORPHOLOGY_PARAMETERS, MorphologySpec,
                                           ObjectSpec, OrientationGoal, ParameterSpec, PhysicsSpec,
                                           POLICY_KINDS, PolicySpec, PositionGoal,
@@ -506,10 +506,12 @@ class _Reader:
             share=share)
 
     def physics(self, value, key):
-        section = self.mapping(value, key, optional=('solver_iterations',
+        section = self.mapping(value, key, optional=('engine', 'solver_iterations',
                                                      'contact_breaking_threshold'))
         default = PhysicsSpec()
         return PhysicsSpec(
+            engine=self.choice(section.get('engine', default.engine), _join(key, 'engine'),
+                               ENGINES),
             solver_iterations=self.integer(section.get('solver_iterations',
                                                        default.solver_iterations),
                                            _join(key, 'solver_iterations')),

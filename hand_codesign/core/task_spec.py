@@ -33,6 +33,7 @@ MORPHOLOGY_PARAMETERS = ('initial_angle', 'finger_position_x', 'finger_position_
 RESTING_TOLERANCE = 1e-4  # m: how far a plane start's z may be from the resting height
 AXES = ('x', 'y', 'z')  # the world axes a position goal may measure
 WORLD_AGGREGATES = ('mean', 'worst')  # worlds.aggregate: eq. (5)'s mean, or CVaR of the worst
+ENGINES = ('pybullet', 'mujoco')  # physics.engine: core.sim or core.mujoco_sim
 WORLD_RESAMPLING = ('none', 'generation')  # worlds.resample: a fixed set, or a draw per generation
 FINAL_CHECK = 5  # default worlds.final_check: the last generations whose bests are re-evaluated
 
@@ -229,7 +230,7 @@ class EarlyTerminationSpec:
 @dataclass(frozen=True)
 class PhysicsSpec:
     """
-    Bullet settings that trade accuracy for speed; the defaults are those of Table I's runs.
+    The physics engine and Bullet's settings; the defaults are those of Table I's runs.
 
     Fewer solver iterations and a shorter contact breaking threshold (Bullet keeps contact
     points up to that distance apart) make every step cheaper; bench/bench_physics.py measures
@@ -238,6 +239,9 @@ class PhysicsSpec:
 
     solver_iterations: int = 50
     contact_breaking_threshold: float = 0.02  # m
+    # 'pybullet' (Table I's runs) or 'mujoco' (core.mujoco_sim, whose own contact settings
+    # are fixed there; the two Bullet settings above do not apply to it)
+    engine: str = 'pybullet'
 
 
 @dataclass(frozen=True)

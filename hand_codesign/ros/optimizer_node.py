@@ -36,6 +36,7 @@ PARAMETERS = {
     'iterations': (0, "generations; 0 keeps the task file's", (0, 10**6)),
     'population': (0, "candidates per generation; 0 keeps the task file's", (0, 10**5)),
     'world_states': (0, "randomized worlds per candidate; 0 keeps the task file's", (0, 10**6)),
+    'engine': ('', "physics engine, pybullet or mujoco; empty keeps the task file's", None),
     'run_id': ('', 'id of the run; empty: made from the time and process id', None),
     'evaluators_expected': (1, 'evaluators to hear from before starting', (0, 10**4)),
     'subscribers_expected': (0, 'other subscribers (recorders) to wait for', (0, 100)),
@@ -69,7 +70,8 @@ class OptimizerNode(Node):
             seed, path = self.settings['seed'], self.settings['task_file']
             task = load_run_task(package_file(path, 'parameter task_file'),
                                  None if seed < 0 else seed, self.settings['iterations'],
-                                 self.settings['population'], self.settings['world_states'])
+                                 self.settings['population'], self.settings['world_states'],
+                                 self.settings['engine'])
         self.run = RunController(
             task, self.settings['run_id'] or default_run_id(task), self, resumed,
             self.settings['heartbeat_timeout'], self.settings['evaluation_timeout'],

@@ -30,6 +30,7 @@ PARAMETERS = {
     'angle_noise': (0.0, 'standard deviation of the orientation noise, rad', (0.0, 3.2)),
     'latency': (0.0, "seconds between a trial's start and its first poses", (0.0, 60.0)),
     'seed': (0, 'seed of the noise', (0, 2 ** 31 - 1)),
+    'engine': ('', "physics engine, pybullet or mujoco; empty: the run's", None),
     'frame_id': ('world', "frame of the poses: the task's world frame", None),
     'subscribers_expected': (0, 'status and pose subscribers to await before a trial', (0, 100)),
 }
@@ -45,7 +46,8 @@ class SimRigNode(Node):
         self.settings = declare_read_only(self, PARAMETERS)
         self.rig = SimulatedRig(SampleClock(self.settings['rate'], self.settings['phase']),
                                 (self.settings['position_noise'],
-                                 self.settings['angle_noise']), self.settings['seed'])
+                                 self.settings['angle_noise']), self.settings['seed'],
+                                self.settings['engine'])
         self.runs = {}
         self.last_stamp = 0  # ns, the end of the last trial
         self.candidates = collections.OrderedDict()

@@ -1,0 +1,120 @@
+"""
+Benchmark and cross-check of the two physics engines (PyBullet, MuJoCo) on Tasks 5 and 6.
+
+Measures, in one run, per task:
+- the designs: --designs candidates spread evenly over a seeded CMA-ES search of the task on
+  PyBullet (Table I's settings, --generations x --popsize, --world-states worlds), those that
+  are simulated (no start collision; bench_physics.searched_designs);
+- speed: evaluate() per core (CPU time of this process), MuJoCo over PyBullet, on the same
+  designs and worlds, in interleaved rounds, best of --rounds (target >= 2.0);
+- agreement: Spearman's rank correlation of the designs' weighted-sum fitness between the
+  engines (target >= 0.85);
+- start collisions: the verdicts of both engines on --collision-pairs (design, world) pairs,
+  designs drawn uniformly from the genome space (so both verdicts occur), one world each
+  (target: agree in >= 99 %).
+
+Usage: python bench/bench_engines.py [--designs 200] [--generations 25] [--popsize 16]
+       [--world-states 8] [--speed-sample 12] [--rounds 3] [--collision-pairs 1000]
+"""
+
+import argparse
+import dataclasses
+import os
+import time
+
+from bench_physics import searched_designs, spearman
+from hand_codesign.core.evaluate import evaluate, shared_simulator
+from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.hand import hand_model
+from hand_codesign.core.task import load_task
+from hand_codesign.core.worlds import object_state, world_states
+import numpy as np
+
+TASKS = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config', 'tasks')
+
+
+def on_engine(task, engine):
+    """Return the task simulated with `engine`."""
+    return task.replace(physics=dataclasses.replace(task.physics, engine=engine))
+
+
+def speed_ratio(tasks, genomes, rounds):
+    """Return (PyBullet, MuJoCo) CPU seconds of evaluate() on the genomes, best of rounds."""
+    seconds = np.zeros(2)
+    for x in genomes:
+        best = np.full(2, np.inf)
+        for _ in range(rounds):
+            for index, task in enumerate(tasks):
+                start = time.process_time()
+                evaluate(x, task)
+                best[index] = min(best[index], time.process_time() - start)
+        seconds += best
+    return seconds
+
+
+def collision_agreement(task, pairs, seed=5):
+    """Return (agreeing pairs, pairs, colliding pairs on PyBullet) of start-collision checks."""
+    spec = genome_spec(task)
+    generator = np.random.default_rng(seed)
+    states = [object_state(task, world) for world in world_states(task, pairs)]
+    simulators = [shared_simulator('pybullet'), shared_simulator('mujoco')]
+    agree = colliding = 0
+    for state in states:
+        model = hand_model(spec.decode(generator.random(spec.size)).hand, task.hand)
+        verdicts = []
+        for simulator in simulators:
+            simulator.build(task, model)
+            shape = simulator.object_shape(state, task.object_spec.shape)
+            verdicts.append(simulator.start_collisions([(state, shape)]))
+        agree += verdicts[0] == verdicts[1]
+        colliding += verdicts[0]
+    return agree, len(states), colliding
+
+
+def bench_task(name, arguments):
+    """Print the figures of one task."""
+    reference = load_task(os.path.join(TASKS, name + '.yaml')).replace(
+        num_world_states=arguments.world_states, population=arguments.popsize, seed=1,
+        iterations=10 ** 6)
+    mujoco = on_engine(reference, 'mujoco')
+    started = time.perf_counter()
+    genomes, bullet_fitness = searched_designs(reference, arguments.generations,
+                                               arguments.designs)
+    mujoco_results = [evaluate(x, mujoco) for x in genomes]
+    mujoco_fitness = np.array([result.fitness for result in mujoco_results])
+    unstable = sum(result.unstable_worlds > 0 for result in mujoco_results)
+    sample = genomes[::max(1, len(genomes) // arguments.speed_sample)][:arguments.speed_sample]
+    bullet_seconds, mujoco_seconds = speed_ratio((reference, mujoco), sample, arguments.rounds)
+    agree, pairs, colliding = collision_agreement(reference, arguments.collision_pairs)
+    print(f'{name}: {len(genomes)} designs from {arguments.generations} x {arguments.popsize} '
+          f'CMA-ES on PyBullet, {arguments.world_states} worlds each '
+          f'({time.perf_counter() - started:.0f} s)')
+    print(f'  evaluate() per core, MuJoCo over PyBullet: {bullet_seconds / mujoco_seconds:.2f} '
+          f'(PyBullet {bullet_seconds / len(sample) * 1e3:.1f} ms, MuJoCo '
+          f'{mujoco_seconds / len(sample) * 1e3:.1f} ms per evaluation, {len(sample)} designs, '
+          f'best of {arguments.rounds})')
+    print(f'  Spearman rank correlation of the weighted sum between engines: '
+          f'{spearman(bullet_fitness, mujoco_fitness):.3f} (designs unstable on MuJoCo: '
+          f'{unstable}); median fitness PyBullet {np.median(bullet_fitness):.4f}, '
+          f'MuJoCo {np.median(mujoco_fitness):.4f}')
+    print(f'  start-collision verdicts agree: {agree} of {pairs} (design, world) pairs '
+          f'({agree / pairs * 100:.1f} %; {colliding} collide on PyBullet)')
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
+    parser.add_argument('--tasks', nargs='+', default=['task5', 'task6'])
+    parser.add_argument('--designs', type=int, default=200)
+    parser.add_argument('--generations', type=int, default=25)
+    parser.add_argument('--popsize', type=int, default=16)
+    parser.add_argument('--world-states', type=int, default=8)
+    parser.add_argument('--speed-sample', type=int, default=12)
+    parser.add_argument('--rounds', type=int, default=3)
+    parser.add_argument('--collision-pairs', type=int, default=1000)
+    arguments = parser.parse_args()
+    for name in arguments.tasks:
+        bench_task(name, arguments)
+
+
+if __name__ == '__main__':
+    main()
