@@ -53,8 +53,8 @@ from hand_codesign.core.hand import HandModel
 from hand_codesign.core.outcomes import CONTACT_DISTANCE
 from hand_codesign.core.policies import TorquePolicy
 from hand_codesign.core.sim import (_FRAME, _JOINT_WATCH, _RECORD, COLLISION_TOLERANCE,
-                                    EventPlan, EXPLOSION_DISTANCE, EXPLOSION_JOINT_SPEED,
-                                    GRAVITY, GROUND_FRICTION, Rollout)
+                                    EXPLOSION_DISTANCE, EXPLOSION_JOINT_SPEED, GRAVITY,
+                                    GROUND_FRICTION, Rollout, Simulator)
 import mujoco
 import numpy as np
 
@@ -339,16 +339,8 @@ class MujocoSimulator:
 
     # ---------------------------------------------------------------- rollout
 
-    def plan(self, schedule, frame_every=0):
-        """Return the EventPlan of a goal schedule (cached)."""
-        key = (schedule, frame_every)
-        plan = self._plans.get(key)
-        if plan is None:
-            plan = EventPlan(schedule, schedule.time_step, frame_every)
-            if len(self._plans) > 16:
-                self._plans.clear()
-            self._plans[key] = plan
-        return plan
+    # the same cache of event plans as PyBullet's simulator (self._plans)
+    plan = Simulator.plan
 
     def rollout(self, state, shape, policy, schedule,
                 on_frame: Optional[Callable] = None, frame_every=1,
