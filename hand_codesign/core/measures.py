@@ -49,8 +49,7 @@ from typing import Optional
 
 from hand_codesign.core.evaluate import _TaskContext, evaluate_design
 # the rule of resting on a limit while touching is core.outcomes' (evaluate uses it too)
-from hand_codesign.core.outcomes import (resting_on_limit_touching,
-                                         resting_on_reached_limit_touching)
+from hand_codesign.core.outcomes import limit_rests, on_its_limit, reached_its_limit
 from hand_codesign.core.robustness import map_chunks, start_and_goal_poses
 from hand_codesign.core.worlds import WorldState
 import numpy as np
@@ -252,8 +251,8 @@ class LimitContactWatch:
 
     def on_frame(self, step, simulator):
         # every frame overwrites the flags: the last one is the rollout's end
-        self.flags[self.world] = resting_on_limit_touching(simulator)
-        self.reached[self.world] = resting_on_reached_limit_touching(simulator)
+        self.flags[self.world], self.reached[self.world] = limit_rests(
+            simulator, (on_its_limit, reached_its_limit))
 
 
 def _measure_chunk(job):

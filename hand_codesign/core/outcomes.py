@@ -50,7 +50,7 @@ def touching_links(simulator):
 
 def resting_on_limit_touching(simulator):
     """Return True if some finger has a joint on a limit and touches the current object."""
-    return _finger_on_limit_touching(simulator, on_its_limit)
+    return limit_rests(simulator, (on_its_limit,))[0]
 
 
 def resting_on_reached_limit_touching(simulator):
@@ -61,21 +61,23 @@ def resting_on_reached_limit_touching(simulator):
     that its initial angle was not already on (reached_its_limit), so a design that starts a
     joint against a limit and never moves it does not count.
     """
-    return _finger_on_limit_touching(simulator, reached_its_limit)
+    return limit_rests(simulator, (reached_its_limit,))[0]
 
 
-def _finger_on_limit_touching(simulator, rests_on_limit):
-    """Return True if a finger touches the object while rests_on_limit(link, angle) holds."""
+def limit_rests(simulator, rules):
+    """
+    Return, per rule(link, angle), whether a finger touching the object has a joint it holds.
+
+    The scene (contacts, joint angles) is read once for all the rules.
+    """
     links = simulator.model.links
     if simulator.object_body is None or not links:
-        return False
+        return tuple(False for _ in rules)
     touching = touching_links(simulator)
     angles = simulator.joint_angles()
-    for finger in fingers(links):
-        on_limit = any(rests_on_limit(links[index], angles[index]) for index in finger)
-        if on_limit and touching.intersection(finger):
-            return True
-    return False
+    groups = [finger for finger in fingers(links) if touching.intersection(finger)]
+    return tuple(any(rule(links[index], angles[index]) for finger in groups for index in finger)
+                 for rule in rules)
 
 
 def fingers(links):
@@ -168,6 +170,7 @@ def outcomes_of(value):
 
 
 __all__ = ['Answer', 'CONTACT_DISTANCE', 'LIMIT_TOLERANCE', 'OUTCOME_NAMES', 'OUTCOME_RANGE',
-           'OutcomeWatch', 'fingers', 'objectives_of', 'on_its_limit', 'outcomes_of',
+           'OutcomeWatch', 'fingers', 'limit_rests', 'objectives_of', 'on_its_limit',
+           'outcomes_of',
            'reached_its_limit', 'resting_on_limit_touching',
            'resting_on_reached_limit_touching', 'task_outcomes', 'touching_links']
