@@ -8,9 +8,10 @@ watches and frames), so core.evaluate runs either engine from the task's
 HandModel table that core.hand builds in PyBullet: a ground plane, the palm welded to the world
 at the hand's base pose, one body per segment with its hinge, capsule, mass and inertia (about
 its centre, link axes, given explicitly), and one free object body whose shape, size, mass,
-inertia, friction and pose are set in the candidate's MjSpec, which is compiled for each
-world (about 1 ms; `_load_world` says why not in place): every world starts from a freshly
-compiled model and data, so rollouts do not depend on the order of the worlds.
+inertia, friction and pose are written into the candidate's compiled model for each world
+(`_load_world`: the same fields as a model compiled per world, bit for bit, without the
+1.5 ms compile), and every world starts from a reset data, so rollouts do not depend on the
+order of the worlds.
 
 Settings chosen to match Bullet on this model (one place; measured in test_mujoco_sim.py):
 - Joint ranges are radians (`compiler.degree` off: MjSpec reads degrees by default); equal
@@ -245,11 +246,8 @@ class MujocoSimulator:
         spec = hand_spec(model, task.time_step, task.hand.base_position,
                          task.hand.base_orientation, task.object_spec.shape,
                          task.policy.gravity_compensation)
-        self._spec = spec
         self.mj_model = spec.compile()
         self.mj_data = mujoco.MjData(self.mj_model)
-        # start collisions need the object's geometry only: written into this copy in place
-        self._collision_model = self.mj_model
         self._scratch = None  # the PD law's MjData, made on first use
         self._hold_rows = self._hold_until = None
         self.task, self.model = task, model
@@ -271,27 +269,40 @@ class MujocoSimulator:
 
     def _load_world(self, state, shape):
         """
-        Compile the scene with a world's object (size, mass, inertia, friction, start pose).
+        Write a world's object (size, mass, inertia, friction, start pose) into the model.
 
-        Compiled per world, not written into the compiled model: mj_setConst leaves the
-        object's dof_M0 and dof_invweight0 (which scale the contact impedance) as they were.
+        The candidate's model is compiled once (`build`); a world's differences are written
+        into its fields, then mj_setConst recomputes what depends on them (subtree masses,
+        dof_M0, the invweights that scale the contact impedance, dof_length, the object's
+        bounding volume). The fields are the compiler's for that world bit for bit, the
+        object's inertial frame included (test_mujoco_sim compares every array with a model
+        compiled for the world), so the physics and its bits are those of a model compiled
+        per world, without the compile (about 1.5 ms a world).
         """
         key = (state, shape)
         if self._loaded == key:
             return
-        spec = self._spec
-        size, _, _ = _geom_size(shape, state.size)
-        geom, body = spec.geom('object'), spec.body('object')
-        geom.size = list(size)
-        geom.friction = [self.model.friction * state.friction, 0.0, 0.0]
-        spec.pair('object_ground').friction = [state.friction, state.friction, 0.0, 0.0, 0.0]
-        body.mass = state.mass
-        body.inertia = list(object_inertia(shape, state.size, state.mass))
-        body.pos = list(state.position)
-        body.quat = _wxyz(state.orientation)
-        # every world's model has the same sizes, so one MjData serves them all (making one
-        # costs more than compiling); reset() clears it completely before each rollout
-        self.mj_model = spec.compile()
+        m, d = self.mj_model, self.mj_data
+        size, bound, half = _geom_size(shape, state.size)
+        geom, body = self._object_geom, self._object_body
+        m.geom_size[geom] = size
+        m.geom_rbound[geom] = bound
+        m.geom_aabb[geom] = (0.0, 0.0, 0.0, *half)
+        m.geom_friction[geom, 0] = self.model.friction * state.friction
+        m.pair_friction[self._object_pair] = (state.friction, state.friction, 0.0, 0.0, 0.0)
+        m.body_mass[body] = state.mass
+        m.body_inertia[body] = object_inertia(shape, state.size, state.mass)
+        orientation = _wxyz(state.orientation)
+        # the compiler puts a free body's frame and its inertial frame at the start pose
+        for position_field, orientation_field in ((m.body_pos, m.body_quat),
+                                                  (m.body_ipos, m.body_iquat)):
+            position_field[body] = state.position
+            orientation_field[body] = orientation
+        start = self._object_qpos
+        for pose in (m.qpos0, m.qpos_spring):
+            pose[start:start + 3] = state.position
+            pose[start + 3:start + 7] = orientation
+        mujoco.mj_setConst(m, d)
         self._loaded = key
 
     def reset(self, state, shape):
@@ -307,8 +318,9 @@ class MujocoSimulator:
         d.qpos[start + 3:start + 7] = _wxyz(state.orientation)
 
     def _place_geometry(self, state, shape):
-        """Write a world's object geometry and pose into the collision copy of the model."""
-        m, d = self._collision_model, self.mj_data
+        """Write a world's object geometry and pose into the model, for collisions only."""
+        m, d = self.mj_model, self.mj_data
+        self._loaded = None  # the world loaded for rollouts is no longer whole
         size, bound, half = _geom_size(shape, state.size)
         geom = self._object_geom
         m.geom_size[geom] = size
