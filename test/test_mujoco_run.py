@@ -13,16 +13,27 @@ from hand_codesign.core.runs import engine_version
 import mujoco
 import numpy as np
 import pytest
+from test_system import finish, run_killing_an_evaluator, start_run, summaries
 
 TASK = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'tasks' / 'task5.yaml'
+MUJOCO = ['--engine', 'mujoco']
+# enough generations that an evaluator killed after the first still had work (a MuJoCo
+# evaluation of 4 worlds takes about 15 ms)
+GENERATIONS = 12
+BUDGET = ['--iterations', str(GENERATIONS), '--popsize', '6', '--world-states', '4',
+          '--seed', '7']
 
 
-def test_a_run_on_mujoco_records_its_engine_and_evaluations_any_process_recomputes(tmp_path):
-    bag = tmp_path / 'bag'
-    finished = run_cli('run', '--task', TASK, '--engine', 'mujoco', '--evaluators', '2',
-                       '--iterations', '2', '--popsize', '4', '--world-states', '2', '--bag',
-                       bag, '--quiet')
-    assert finished.returncode == 0, finished.stderr
+@pytest.fixture(scope='module')
+def mujoco_run(tmp_path_factory):
+    bag = tmp_path_factory.mktemp('mujoco') / 'bag'
+    finish(start_run(bag, 2, extra=MUJOCO, budget=BUDGET, task=TASK))
+    return bag
+
+
+def test_a_run_on_mujoco_records_its_engine_and_evaluations_any_process_recomputes(
+        mujoco_run, tmp_path):
+    bag = mujoco_run
     record = read_run(bag)
     info = record.run_info
     assert (info.engine, info.engine_version) == ('mujoco', engine_version('mujoco'))
@@ -64,3 +75,14 @@ def test_a_run_on_mujoco_records_its_engine_and_evaluations_any_process_recomput
         body = model.body(link.name).id
         np.testing.assert_allclose(data.xpos[body], position, atol=1e-7)  # MJCF: 9 digits
         assert abs(np.dot(data.xquat[body], (w, x, y, z))) == pytest.approx(1.0, abs=1e-7)
+
+
+def test_a_killed_evaluator_changes_nothing_on_mujoco(mujoco_run, tmp_path):
+    killed = tmp_path / 'killed'
+    run_killing_an_evaluator(killed, BUDGET, extra=MUJOCO, after=f'generation 1/{GENERATIONS}')
+    record = read_run(killed)
+    assert record.run_info.engine == 'mujoco'
+    ok = record.evaluations.select(record.evaluations['status'] == 0)
+    assert sorted(set(ok['candidate_id'])) == list(range(GENERATIONS * 6))
+    assert max(record.candidates['attempt']) >= 1, 'no candidate had to be sent again'
+    assert summaries(killed) == summaries(mujoco_run)

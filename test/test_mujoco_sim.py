@@ -10,7 +10,7 @@ from hand_codesign.core.design import ControllerDesign, FingerDesign, JointDesig
 from hand_codesign.core.evaluate import evaluate, evaluate_design
 from hand_codesign.core.geometry import link_frames
 from hand_codesign.core.hand import hand_model
-from hand_codesign.core.mujoco_sim import MujocoSimulator
+from hand_codesign.core.mujoco_sim import _geom_size, hand_spec, MujocoSimulator, object_inertia
 from hand_codesign.core.objectives import COLLISION_PENALTY, goal_schedule
 from hand_codesign.core.policies import make_policy
 from hand_codesign.core.worlds import object_state, WorldState
@@ -195,3 +195,35 @@ def test_replay_poses_of_a_mujoco_run_are_mujoco_s(task):
     assert not np.allclose(np.concatenate(bullet[-1][2]), final, atol=1e-6)
     for (position, _), (expected, _) in zip(frames[0][1], link_frames(model, palm)):
         np.testing.assert_allclose(position, expected, atol=1e-12)
+
+
+@pytest.mark.parametrize('preset', ['task1.yaml', 'task2.yaml', 'task5.yaml'])  # each shape
+def test_a_world_written_into_the_model_is_the_model_compiled_for_it(preset):
+    task = on_mujoco(load_task(TASKS / preset))
+    spec = genome_spec(task)
+    model = hand_model(spec.decode(spec.initial_mean()).hand, task.hand)
+    shape = task.object_spec.shape
+    with MujocoSimulator() as simulator:
+        simulator.build(task, model)
+        for world in world_states(task, 3):  # each written over the one before
+            state = object_state(task, world)
+            simulator.reset(state, shape)
+            compiled = hand_spec(model, task.time_step, task.hand.base_position,
+                                 task.hand.base_orientation, shape,
+                                 task.policy.gravity_compensation)
+            compiled.geom('object').size = list(_geom_size(shape, state.size)[0])
+            compiled.geom('object').friction = [model.friction * state.friction, 0.0, 0.0]
+            compiled.pair('object_ground').friction = [state.friction] * 2 + [0.0] * 3
+            body = compiled.body('object')
+            body.mass = state.mass
+            body.inertia = list(object_inertia(shape, state.size, state.mass))
+            body.pos = list(state.position)
+            x, y, z, w = state.orientation
+            body.quat = [w, x, y, z]
+            expected, written = compiled.compile(), simulator.mj_model
+            for name in dir(expected):
+                value = getattr(expected, name)
+                if isinstance(value, np.ndarray):
+                    np.testing.assert_array_equal(getattr(written, name), value, err_msg=name)
+            for name in ('meaninertia', 'meanmass', 'extent'):  # meansize: drawings only
+                assert getattr(written.stat, name) == getattr(expected.stat, name), name

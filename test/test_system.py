@@ -150,15 +150,14 @@ def evaluator_processes(runner):
             if 'evaluator_node' in ' '.join(child.cmdline())]
 
 
-def test_killed_evaluator_does_not_change_the_result(one_evaluator_run, tmp_path):
-    bag, _ = one_evaluator_run
-    killed = tmp_path / 'killed'
-    process = start_run(killed, 2, budget=BUDGET)
+def run_killing_an_evaluator(bag, budget, extra=(), after='generation 1/'):
+    """Run with 2 evaluators, SIGKILL one once a line holds `after`; return the output."""
+    process = start_run(bag, 2, extra=extra, budget=budget)
     lines = []
     reader = threading.Thread(target=lambda: lines.extend(process.stdout), daemon=True)
     reader.start()
     deadline = time.monotonic() + 120
-    while not any('generation 1/3' in line for line in lines):
+    while not any(after in line for line in lines):
         assert time.monotonic() < deadline and process.poll() is None, ''.join(lines)
         time.sleep(0.05)
     victims = evaluator_processes(process)
@@ -167,6 +166,13 @@ def test_killed_evaluator_does_not_change_the_result(one_evaluator_run, tmp_path
     process.wait(timeout=240)
     reader.join(timeout=10)
     assert process.returncode == 0, ''.join(lines)
+    return ''.join(lines)
+
+
+def test_killed_evaluator_does_not_change_the_result(one_evaluator_run, tmp_path):
+    bag, _ = one_evaluator_run
+    killed = tmp_path / 'killed'
+    run_killing_an_evaluator(killed, BUDGET, after='generation 1/3')
     record = read_run(killed)
     told = record.generation_summaries['evaluations'][-1]
     assert told == 3 * 6

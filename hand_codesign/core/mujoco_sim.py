@@ -113,6 +113,24 @@ _GEOM_TYPES = {'box': mujoco.mjtGeom.mjGEOM_BOX, 'sphere': mujoco.mjtGeom.mjGEOM
                'capsule': mujoco.mjtGeom.mjGEOM_CAPSULE}
 
 
+def _sequential_mean(values):
+    total = 0.0
+    for value in values.tolist():
+        total += value
+    return total / len(values)
+
+
+_SIZE_NAMES = []  # MjModel's size attributes (nq, nv, ..., narena), read on first use
+
+
+def model_sizes(m):
+    """Return the sizes of a compiled model (nq, nv, nbody, ..., narena): what MjData holds."""
+    if not _SIZE_NAMES:
+        _SIZE_NAMES.extend(name for name in dir(m)
+                           if name.startswith('n') and isinstance(getattr(m, name), int))
+    return tuple(getattr(m, name) for name in _SIZE_NAMES)
+
+
 def _wxyz(quaternion):
     x, y, z, w = quaternion
     return [w, x, y, z]
@@ -223,13 +241,14 @@ class MujocoSimulator:
         self.task = None
         self.model = None  # the HandModel
         self.mj_model = self.mj_data = None
+        self._data_sizes = self._scratch = None  # the sizes of the model mj_data was made for
         self.object_body = None  # not None while a world's object is in the scene
         self._plans = {}
 
     def close(self):
         """Drop the compiled model."""
         self.client = None
-        self.mj_model = self.mj_data = None
+        self.mj_model = self.mj_data = self._data_sizes = self._scratch = None
 
     def __enter__(self):
         """Return the simulator, closed at the end of the with block."""
@@ -247,8 +266,14 @@ class MujocoSimulator:
                          task.hand.base_orientation, task.object_spec.shape,
                          task.policy.gravity_compensation)
         self.mj_model = spec.compile()
-        self.mj_data = mujoco.MjData(self.mj_model)
-        self._scratch = None  # the PD law's MjData, made on first use
+        # a candidate of the same sizes as the last one (the same structure) reuses its data:
+        # making an MjData (a 14 MB arena) costs about 1 ms, and every rollout starts from
+        # mj_resetData, which clears it completely
+        sizes = model_sizes(self.mj_model)
+        if sizes != self._data_sizes:
+            self.mj_data = mujoco.MjData(self.mj_model)
+            self._scratch = None  # the PD law's MjData, made on first use
+            self._data_sizes = sizes
         self._hold_rows = self._hold_until = None
         self.task, self.model = task, model
         self._joints = model.num_joints
@@ -303,6 +328,10 @@ class MujocoSimulator:
             pose[start:start + 3] = state.position
             pose[start + 3:start + 7] = orientation
         mujoco.mj_setConst(m, d)
+        # the compiler's means (in its order of summation); meaninertia scales the solver's
+        # tolerance. Left as built: stat.meansize, which only scales drawings.
+        m.stat.meaninertia = _sequential_mean(m.dof_M0)
+        m.stat.meanmass = _sequential_mean(m.body_mass[1:])
         self._loaded = key
 
     def reset(self, state, shape):
