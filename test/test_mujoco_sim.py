@@ -10,7 +10,8 @@ from hand_codesign.core.design import ControllerDesign, FingerDesign, JointDesig
 from hand_codesign.core.evaluate import evaluate, evaluate_design
 from hand_codesign.core.geometry import link_frames
 from hand_codesign.core.hand import hand_model
-from hand_codesign.core.mujoco_sim import _geom_size, hand_spec, MujocoSimulator, object_inertia
+from hand_codesign.core.mujoco_sim import (_geom_size, ARENA_BYTES, hand_spec, MujocoSimulator,
+                                           object_inertia)
 from hand_codesign.core.objectives import COLLISION_PENALTY, goal_schedule
 from hand_codesign.core.policies import make_policy
 from hand_codesign.core.worlds import object_state, WorldState
@@ -211,6 +212,7 @@ def test_a_world_written_into_the_model_is_the_model_compiled_for_it(preset):
             compiled = hand_spec(model, task.time_step, task.hand.base_position,
                                  task.hand.base_orientation, shape,
                                  task.policy.gravity_compensation)
+            compiled.memory = ARENA_BYTES
             compiled.geom('object').size = list(_geom_size(shape, state.size)[0])
             compiled.geom('object').friction = [model.friction * state.friction, 0.0, 0.0]
             compiled.pair('object_ground').friction = [state.friction] * 2 + [0.0] * 3

@@ -71,8 +71,13 @@ HAND_PRIORITY, OBJECT_PRIORITY = 1, 2
 # rad: the range of a joint whose limits coincide (Bullet locks it there; MuJoCo wants
 # lower < upper)
 LOCKED_RANGE = 1e-9
-_DIVERGENCE_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQPOS,
-                        mujoco.mjtWarning.mjWARN_BADQVEL)
+# bytes of MjData's arena (contacts, constraints, the solver's stack): these scenes use about
+# 20 kB (a few contacts, under 30 constraint rows); MuJoCo's default, 14 MB, costs about 1 ms
+# to allocate and clear at each compile. The size changes no result, only what fits.
+ARENA_BYTES = 2 << 20
+_DIVERGENCE_WARNINGS = tuple(int(kind) for kind in (
+    mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL))
 
 
 def stiff_solref(time_step):
@@ -265,6 +270,7 @@ class MujocoSimulator:
         spec = hand_spec(model, task.time_step, task.hand.base_position,
                          task.hand.base_orientation, task.object_spec.shape,
                          task.policy.gravity_compensation)
+        spec.memory = ARENA_BYTES
         self.mj_model = spec.compile()
         # a candidate of the same sizes as the last one (the same structure) reuses its data:
         # making an MjData (a 14 MB arena) costs about 1 ms, and every rollout starts from
@@ -370,12 +376,13 @@ class MujocoSimulator:
         hand = self._hand_geoms
         for state, shape in objects:
             d = self._place_geometry(state, shape)
-            for contact in d.contact[:d.ncon]:
-                if contact.dist >= -COLLISION_TOLERANCE:
-                    continue
-                one, two = contact.geom
-                if one in hand or two in hand:
-                    return True
+            count = d.ncon
+            if not count:
+                continue
+            contacts = d.contact  # read as arrays: a contact object each costs more
+            deep = ~(contacts.dist[:count] >= -COLLISION_TOLERANCE)
+            if any(geom in hand for geom in contacts.geom[:count][deep].ravel().tolist()):
+                return True
         return False
 
     # ---------------------------------------------------------------- rollout
@@ -481,7 +488,8 @@ class MujocoSimulator:
     def _stable(self, position, orientation, start, check_joints):
         """Return False for a diverged, non-finite or exploded object or (if asked) hand."""
         d = self.mj_data
-        if any(d.warning[kind].number for kind in _DIVERGENCE_WARNINGS):
+        counts = d.warning.number
+        if any(counts[kind] for kind in _DIVERGENCE_WARNINGS):
             return False
         x, y, z = position
         if not (math.isfinite(x + y + z + sum(orientation))
@@ -490,9 +498,10 @@ class MujocoSimulator:
             return False
         if check_joints:
             joints = self._joints
-            angles, speeds = d.qpos[:joints], d.qvel[:joints]
-            if not (np.all(np.isfinite(angles)) and np.all(np.abs(speeds)
-                                                           < EXPLOSION_JOINT_SPEED)):
+            # in Python: numpy's calls cost more than these few joints
+            if not (all(map(math.isfinite, d.qpos[:joints].tolist()))
+                    and all(abs(speed) < EXPLOSION_JOINT_SPEED
+                            for speed in d.qvel[:joints].tolist())):
                 return False
         return True
 
