@@ -2,8 +2,8 @@
 Benchmark of the optimizer's cost of a Candidate's physical design against its evaluation.
 
 Every Candidate carries its design in SI units, its standard URDF and its controller
-(core.physical.candidate_design, called once per candidate by core.controller). Measures that
-per candidate, the Candidate message built and serialized with and without it, and as the
+(core.sim.physical.candidate_design, called once per candidate by core.run.controller). Measures
+that per candidate, the Candidate message built and serialized with and without it, and as the
 reference, measured in the same run, one evaluation of the same candidates with
 core.evaluate on the task's world states. Prints the costs and their ratio to the evaluation.
 
@@ -18,8 +18,8 @@ import time
 
 from hand_codesign.core import genome_spec, load_task, TaskError
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.optimizers import Candidate
-from hand_codesign.core.physical import candidate_design
+from hand_codesign.core.search.optimizers import Candidate
+from hand_codesign.core.sim.physical import candidate_design
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

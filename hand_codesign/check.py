@@ -6,7 +6,7 @@ run will search and meet: the genome (names, bounds in SI units), the objectives
 training world (randomized values, the object's start pose and its goals in world
 coordinates), the hierarchy's structures, and the physics steps per evaluation and for the
 whole budget. `--seed`, `--iterations`, `--popsize` and `--world-states` act as in
-`hand-codesign run`. The values come from `core.preview`; `--json` prints them as one JSON
+`hand-codesign run`. The values come from `core.run.preview`; `--json` prints them as one JSON
 object on standard output (floats exact), and nothing else goes there. A task a run would
 refuse exits 2 with one line naming the file.
 """
@@ -16,10 +16,10 @@ import re
 import sys
 import textwrap
 
-from hand_codesign.core.hierarchy import HierarchyError
-from hand_codesign.core.optimizers import OptimizerError
-from hand_codesign.core.preview import preview
-from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.run.preview import preview
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.search.hierarchy import HierarchyError
+from hand_codesign.core.search.optimizers import OptimizerError
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 
@@ -39,7 +39,7 @@ def check_command(arguments):
 
 
 def task_preview(arguments):
-    """Return core.preview of the task a run with these arguments uses, or raise UserError."""
+    """Return core.run.preview of the task a run with these arguments uses, or raise UserError."""
     for flag in OVERRIDES:
         value = getattr(arguments, flag)
         if value is not None and value < 1:

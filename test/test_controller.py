@@ -3,11 +3,11 @@
 import json
 import pathlib
 
-from hand_codesign.core.controller import RunController
-from hand_codesign.core.controller import write_result
-from hand_codesign.core.resume import rebuild_search
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.search import Search
+from hand_codesign.core.run.controller import RunController
+from hand_codesign.core.run.controller import write_result
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.search.resume import rebuild_search
+from hand_codesign.core.search.search import Search
 import numpy as np
 import yaml
 

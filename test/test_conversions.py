@@ -4,13 +4,13 @@ import dataclasses
 import pathlib
 
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.optimizers import Candidate as CoreCandidate
-from hand_codesign.core.optimizers import OptimizerResult
-from hand_codesign.core.physical import candidate_design
-from hand_codesign.core.physical import design_from_physical
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.summary import generation_summary
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.run.summary import generation_summary
+from hand_codesign.core.search.optimizers import Candidate as CoreCandidate
+from hand_codesign.core.search.optimizers import OptimizerResult
+from hand_codesign.core.sim.physical import candidate_design
+from hand_codesign.core.sim.physical import design_from_physical
+from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.ros.conversions import candidate_message
 from hand_codesign.ros.conversions import evaluation_message
 from hand_codesign.ros.conversions import rejection_message

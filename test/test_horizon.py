@@ -13,11 +13,11 @@ from hand_codesign.analysis.resume import resume_point
 from hand_codesign.cli import main
 from hand_codesign.core import TaskError
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.horizon import Horizon
-from hand_codesign.core.objectives import goal_schedule
-from hand_codesign.core.optimizers import replay
-from hand_codesign.core.runs import load_run_task, run_task
-from hand_codesign.core.search import Search
+from hand_codesign.core.run.runs import load_run_task, run_task
+from hand_codesign.core.search.horizon import Horizon
+from hand_codesign.core.search.optimizers import replay
+from hand_codesign.core.search.search import Search
+from hand_codesign.core.sim.objectives import goal_schedule
 from hand_codesign.ros import topics
 from hand_codesign.ros.mcap_writer import message_definition
 from mcap_ros2.writer import Writer
@@ -222,7 +222,7 @@ def test_a_bag_from_before_the_horizon_reads_as_without_one(tmp_path):
             type_name = topics.type_name(type(message))
             definition = '\n'.join(line for line in message_definition(type_name).splitlines()
                                    if 'horizon' not in line and 'sub-problem' not in line
-                                   and 'hand_codesign.core.horizon' not in line)
+                                   and 'hand_codesign.core.search.horizon' not in line)
             schema = writer.register_msgdef(type_name, definition)
             writer.write_message('/' + topic, schema, message, log_time=index + 1)
         writer.finish()

@@ -16,11 +16,11 @@ from hand_codesign.analysis.records import recorded_design
 from hand_codesign.analysis.resume import resume_point
 from hand_codesign.cli import main
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.optimizers import replay
-from hand_codesign.core.resume import rebuild_search
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.search import Search
-from hand_codesign.core.worlds import world_states
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.search.optimizers import replay
+from hand_codesign.core.search.resume import rebuild_search
+from hand_codesign.core.search.search import Search
+from hand_codesign.core.sim.worlds import world_states
 from hand_codesign.errors import UserError
 import numpy as np
 import pytest

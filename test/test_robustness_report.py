@@ -12,8 +12,8 @@ from hand_codesign.analysis.records import structure_bests
 from hand_codesign.analysis.robustness_report import robustness_worlds
 from hand_codesign.cli import main
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.runs import run_task
-from hand_codesign.core.worlds import grid_world_states
+from hand_codesign.core.run.runs import run_task
+from hand_codesign.core.sim.worlds import grid_world_states
 import numpy as np
 
 

@@ -3,9 +3,9 @@
 import pathlib
 import re
 
-from hand_codesign.core.runs import library_versions
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.runs import run_task
+from hand_codesign.core.run.runs import library_versions
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.run.runs import run_task
 from hand_codesign.core.task import load_task
 from hand_codesign.core.task import TaskError
 import pytest

@@ -2,10 +2,10 @@
 
 import pathlib
 
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.objectives import weighted_fitness
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.search import Search
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.search.search import Search
+from hand_codesign.core.sim.objectives import weighted_fitness
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 
 TASKS = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'tasks'

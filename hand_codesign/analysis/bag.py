@@ -16,7 +16,7 @@ big-endian CDR), and gathered per topic into column tables of numpy arrays.
 
 GenerationSummaries are what a reader trusts most (resume rebuilds the search from them), so
 in a signed run each carries an Ed25519 signature under the key its run announced in its first
-RunInfo (core.signing; `_summary_keys`); a summary whose signature fails was forged on the
+RunInfo (core.run.signing; `_summary_keys`); a summary whose signature fails was forged on the
 run's domain, is left out, and counted in ``RunRecord.rejected_summaries`` with a warning.
 """
 
@@ -33,8 +33,8 @@ from hand_codesign.core.contract import GENERATION_SUMMARY_TYPE
 from hand_codesign.core.contract import LOOP_TYPES
 from hand_codesign.core.contract import MESSAGES_PACKAGE
 from hand_codesign.core.contract import RUN_INFO_TYPE
-from hand_codesign.core.runs import run_task
-from hand_codesign.core.signing import summary_valid
+from hand_codesign.core.run.runs import run_task
+from hand_codesign.core.run.signing import summary_valid
 from mcap.exceptions import EndOfFile
 from mcap.exceptions import McapError
 from mcap.records import Channel

@@ -6,7 +6,7 @@ and printing the reader's warnings (a truncated bag is read up to the cut). The 
 work on the RunRecord it returns:
 
 - `run_task_of(record, structure, world_states)`: the Task of the run (as every process of the
-  run rebuilt it, `core.runs.run_task`), for one structure of a hierarchy if asked;
+  run rebuilt it, `core.run.runs.run_task`), for one structure of a hierarchy if asked;
 - `evaluation_rows(record)`: every Evaluation joined with its Candidate (genome, structure),
   with a status of 'ok', 'rejected', 'duplicate' (a later answer for an already evaluated
   candidate, which the optimizer ignored, or an audit's) or 'untold' (an answer that differs
@@ -29,13 +29,13 @@ from hand_codesign.analysis.bag import BagError
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.core.contract import STATUS_NAMES
 from hand_codesign.core.contract import STATUS_OK
-from hand_codesign.core.optimizers import OptimizerError
-from hand_codesign.core.optimizers import replay
 from hand_codesign.core.outcomes import Answer
-from hand_codesign.core.search import Search
+from hand_codesign.core.search.optimizers import OptimizerError
+from hand_codesign.core.search.optimizers import replay
+from hand_codesign.core.search.search import Search
 from hand_codesign.core.task import TaskError
-from hand_codesign.core.task_spec import QD_ALGORITHMS
-from hand_codesign.core.task_spec import RESTART_ALGORITHMS
+from hand_codesign.core.task.parts import QD_ALGORITHMS
+from hand_codesign.core.task.parts import RESTART_ALGORITHMS
 from hand_codesign.errors import UserError
 import numpy as np
 
@@ -298,7 +298,7 @@ class RecordedDesign:
     generation: int
     structure: tuple
     world_states: int            # 0: the run's number of world states
-    horizon: float               # s, its sub-problem (core.horizon); 0: none (older bags too)
+    horizon: float               # s, its sub-problem (search.horizon); 0: none (older bags too)
     x: np.ndarray                # normalized genome, as sent to the evaluator
     genome_names: tuple
     objective_names: list
@@ -306,7 +306,7 @@ class RecordedDesign:
     fitness: float
     world_objectives: np.ndarray  # (worlds, objectives), or None
     evaluator_id: str
-    stage: int = 0               # of a two-stage task (core.stages); 0: one stage, older bags
+    stage: int = 0               # of a two-stage task (search.stages); 0: one stage, older bags
     held_out: bool = False       # evaluated on the held-out worlds (a hierarchy check)
     world_draw: int = 0          # its resampled worlds (Candidate.world_draw); 0: the fixed ones
 
@@ -420,7 +420,7 @@ def told_outcomes(record, rows=None):
 
     A candidate's answer taken is its 'ok' Evaluation (`evaluation_rows`); of the answers
     with the same objectives bit for bit, the outcomes most of them gave (the first on ties),
-    as core.audits takes an answer that two evaluators agree on. Empty for a bag recorded
+    as core.run.audits takes an answer that two evaluators agree on. Empty for a bag recorded
     before Evaluations had outcomes, or of a run without outcome descriptors.
     """
     evaluations = record.evaluations
@@ -460,8 +460,8 @@ def best_candidate_id(record):
     That is the optimizer's own choice in its last GenerationSummary (the lowest weighted sum
     for CMA-ES, the front's point closest to zero for MO-CMA-ES); for a hierarchy the best
     design of the structure the hierarchy chose, and for a run with resampled worlds the best
-    of its final check on the fixed worlds (core.resampling; the search replayed from the bag,
-    as the run's result, or its best so far when the run did not get there); without
+    of its final check on the fixed worlds (core.search.resampling; the search replayed from the
+    bag, as the run's result, or its best so far when the run did not get there); without
     summaries (a bag cut early) the OK evaluation of lowest fitness.
     """
     if record.run_info is not None:
@@ -542,7 +542,7 @@ def replayed_optimizer(record, algorithms, single=False):
 
 def restarts_of(record):
     """
-    Return the core.restarts Restart records of a run of ipop-cma or bipop-cma, else [].
+    Return the core.search.restarts Restart records of a run of ipop-cma or bipop-cma, else [].
 
     Replayed (replayed_optimizer): every CMA-ES instance, the generation it started at, its
     population, step size, regime and why the one before it ended. Only for a run of one
@@ -554,7 +554,7 @@ def restarts_of(record):
 
 def archive_of(record):
     """
-    Return the core.quality_diversity optimizer of a cma-mae or cma-me run, else None.
+    Return the core.search.quality_diversity optimizer of a cma-mae or cma-me run, else None.
 
     Replayed (replayed_optimizer): the descriptors are computed from the genomes (and the
     outcome descriptors read from the Evaluations), so the archive comes back exactly as the

@@ -1,8 +1,8 @@
 """
 `hand-codesign robustness BAG [--samples N] [--out DIR] [--workers P]`: Fig. 3 for a run.
 
-Evaluates the run's best design on many world states with `core.robustness` on P processes
-(default: every core) and writes into DIR (default `<bag>_robustness` next to the bag):
+Evaluates the run's best design on many world states with `core.experiments.robustness` on P
+processes (default: every core) and writes into DIR (default `<bag>_robustness` next to the bag):
 
 - `worlds.csv`: one row per world: its randomized values, the object's position (m) and
   orientation (rad) error with respect to the last goal at the start and at the end,
@@ -23,7 +23,7 @@ side.
 
 World states: when N is v ** k for the k quantities the task randomizes (default 15,625 =
 5 ** 6, the paper's), the grid of v evenly spaced values per quantity, all combinations
-(`core.worlds.grid_world_states`); otherwise N worlds drawn uniformly from the task's ranges
+(`core.sim.worlds.grid_world_states`); otherwise N worlds drawn uniformly from the task's ranges
 with a seed derived from the run's seed (other worlds than those the run optimized on).
 """
 
@@ -32,11 +32,11 @@ import pathlib
 import time
 
 from hand_codesign.analysis import records
-from hand_codesign.analysis.report import write_csv
-from hand_codesign.core.robustness import evaluate_robustness
-from hand_codesign.core.worlds import grid_world_states
-from hand_codesign.core.worlds import randomized_quantities
-from hand_codesign.core.worlds import world_states
+from hand_codesign.analysis.tables import write_csv
+from hand_codesign.core.experiments.robustness import evaluate_robustness
+from hand_codesign.core.sim.worlds import grid_world_states
+from hand_codesign.core.sim.worlds import randomized_quantities
+from hand_codesign.core.sim.worlds import world_states
 from hand_codesign.errors import UserError
 from hand_codesign.outputs import staged
 import numpy as np

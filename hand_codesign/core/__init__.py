@@ -13,12 +13,12 @@ import types
 
 # exported name -> the submodule of core that defines it
 _EXPORTS = {
-    'decode': 'genome', 'genome_spec': 'genome', 'GenomeSpec': 'genome',
-    'objective_names': 'genome',
+    'decode': 'task.genome', 'genome_spec': 'task.genome', 'GenomeSpec': 'task.genome',
+    'objective_names': 'task.genome',
     'evaluate': 'evaluate', 'Evaluation': 'evaluate',
-    'Simulator': 'sim',
+    'Simulator': 'sim.pybullet_sim',
     'load_task': 'task', 'parse_task': 'task', 'Task': 'task', 'TaskError': 'task',
-    'grid_world_states': 'worlds', 'world_states': 'worlds', 'WorldState': 'worlds',
+    'grid_world_states': 'sim.worlds', 'world_states': 'sim.worlds', 'WorldState': 'sim.worlds',
 }
 
 __all__ = sorted(_EXPORTS, key=str.lower)

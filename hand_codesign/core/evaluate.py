@@ -7,7 +7,7 @@ simulated, eq. 5) and runs one rollout per world. Each world gives h_o per objec
 inner mean, eq. 6 when early termination cut it, UNSTABLE_PENALTY when the simulation became
 unstable); the objectives are their mean over the worlds plus the torque penalty of eq. (2),
 or with `worlds: {aggregate: worst, fraction: f}` the mean over each objective's worst f of
-the worlds (CVaR, core.objectives.worst_mean) plus that penalty.
+the worlds (CVaR, core.sim.objectives.worst_mean) plus that penalty.
 
 An unstable world counts UNSTABLE_PENALTY in its objectives. Under the mean it weighs 1 / n;
 under the worst fraction it is always among the worst worlds and weighs 1 / (f n), so f n <= 1
@@ -27,14 +27,14 @@ shares of the worlds (`outcome_names`, `outcomes`); a design that starts in coll
 from dataclasses import dataclass, field
 from typing import Optional, Sequence, Tuple
 
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.hand import hand_model
-from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
-                                           task_torque_penalty, weighted_fitness)
 from hand_codesign.core.outcomes import OutcomeWatch, task_outcomes
-from hand_codesign.core.policies import make_policy
-from hand_codesign.core.sim import Simulator
-from hand_codesign.core.worlds import object_state, world_states
+from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
+                                               task_torque_penalty, weighted_fitness)
+from hand_codesign.core.sim.policies import make_policy
+from hand_codesign.core.sim.pybullet_sim import Simulator
+from hand_codesign.core.sim.worlds import object_state, world_states
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 
 # h_o of every objective of a world whose simulation became unstable (NaN or exploding):
@@ -77,10 +77,10 @@ def shared_simulator(engine='pybullet'):
 
 
 def new_simulator(engine):
-    """Return a new simulator of `engine`: 'pybullet' (core.sim) or 'mujoco'."""
+    """Return a new simulator of `engine`: 'pybullet' (core.sim.pybullet_sim) or 'mujoco'."""
     if engine == 'mujoco':
         # imported on first use: loading MuJoCo costs a process about 0.2 s
-        from hand_codesign.core.mujoco_sim import MujocoSimulator
+        from hand_codesign.core.sim.mujoco_sim import MujocoSimulator
         return MujocoSimulator()
     return Simulator()
 

@@ -11,7 +11,7 @@ from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker
 from visualization_msgs.msg import MarkerArray
 
-# core.geometry's shape kinds -> Marker types
+# core.sim.geometry's shape kinds -> Marker types
 MARKER_TYPES = {'arrow': Marker.ARROW, 'box': Marker.CUBE, 'sphere': Marker.SPHERE,
                 'cylinder': Marker.CYLINDER}
 
@@ -32,7 +32,7 @@ def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, 
     Return the Candidate message sending an optimizer's candidate to an evaluator.
 
     world_states: 0 evaluates it on the run's worlds; more for a hierarchy structure's check.
-    design: its core.physical.PhysicalDesign, for evaluators that do not decode genomes.
+    design: its core.sim.physical.PhysicalDesign, for evaluators that do not decode genomes.
     """
     message = Candidate(
         run_id=run_id, generation=int(candidate.generation),
@@ -105,7 +105,7 @@ def summary_message(run_id, summary):
 
 
 def shape_marker(shape, number, stamp, frame_id=WORLD_FRAME):
-    """Return the Marker of a core.geometry Shape; `number` is its id within its group."""
+    """Return the Marker of a core.sim.geometry Shape; `number` is its id within its group."""
     marker = Marker(ns=shape.group, id=int(number), type=MARKER_TYPES[shape.kind],
                     action=Marker.ADD, frame_locked=False)
     marker.header.frame_id = frame_id
@@ -122,7 +122,7 @@ def shape_marker(shape, number, stamp, frame_id=WORLD_FRAME):
 
 def markers_message(shapes, stamp, frame_id=WORLD_FRAME):
     """
-    Return the MarkerArray drawing core.geometry Shapes, numbered within each group.
+    Return the MarkerArray drawing core.sim.geometry Shapes, numbered within each group.
 
     It starts with a DELETEALL marker, so that a viewer drops the shapes of the previous
     array (a design of another structure has another number of segments).
@@ -139,7 +139,7 @@ def markers_message(shapes, stamp, frame_id=WORLD_FRAME):
 
 
 def trial_request(candidate, evaluator_id, trial_id, spec):
-    """Return the TrialRequest of one trial (a core.rig.TrialSpec) of a candidate."""
+    """Return the TrialRequest of one trial (a core.rig.trials.TrialSpec) of a candidate."""
     return TrialRequest(
         run_id=candidate.run_id, candidate_id=candidate.candidate_id,
         attempt=candidate.attempt, evaluator_id=evaluator_id, trial_id=int(trial_id),
