@@ -34,6 +34,7 @@ from hand_codesign.core.experiments.catalog import run_key, seeds_text, training
 from hand_codesign.core.experiments.measures import (DesignMeasures, measure_worlds, summarize,
                                                      unseen_world_states, with_pose_error,
                                                      WorldMeasures)
+from hand_codesign.core.task.variant import Variant
 from hand_codesign.errors import UserError
 import numpy as np
 
@@ -75,7 +76,7 @@ def final_design(bag):
     else:
         design = records.recorded_design(record, records.best_candidate_id(record))
         structure, x = design.structure, design.x
-    return records.run_task_of(record, structure or None), x, structure
+    return records.run_task_of(record, Variant(structure=tuple(structure or ()))), x, structure
 
 
 def structure_bests(bags):
@@ -139,7 +140,7 @@ def measure_structures(bags, tolerance, unseen_worlds, processes=1):
     for structure, (_, candidate_id, bag) in sorted(structure_bests(bags).items()):
         record = records.open_run(bag, warn=False)
         design = records.recorded_design(record, candidate_id)
-        task = records.run_task_of(record, structure)
+        task = records.run_task_of(record, Variant(structure=tuple(structure)))
         measures = measure_worlds(design.x, task, unseen_world_states(task, unseen_worlds),
                                   processes)
         measured[structure_text(structure)] = {

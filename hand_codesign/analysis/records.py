@@ -5,8 +5,8 @@ What the analysis verbs need from a run's bag: its task, its evaluations and its
 and printing the reader's warnings (a truncated bag is read up to the cut). The other functions
 work on the RunRecord it returns:
 
-- `run_task_of(record, structure, world_states)`: the Task of the run (as every process of the
-  run rebuilt it, `core.run.runs.run_task`), for one structure of a hierarchy if asked;
+- `run_task_of(record, variant)`: the Task of the run (as every process of the run rebuilt it,
+  `core.run.runs.run_task`), or the version of it a candidate's Variant says, if asked;
 - `evaluation_rows(record)`: every Evaluation joined with its Candidate (genome, structure),
   with a status of 'ok', 'rejected', 'duplicate' (a later answer for an already evaluated
   candidate, which the optimizer ignored, or an audit's) or 'untold' (an answer that differs
@@ -36,6 +36,7 @@ from hand_codesign.core.search.search import Search
 from hand_codesign.core.task import TaskError
 from hand_codesign.core.task.parts import QD_ALGORITHMS
 from hand_codesign.core.task.parts import RESTART_ALGORITHMS
+from hand_codesign.core.task.variant import Variant
 from hand_codesign.errors import UserError
 import numpy as np
 
@@ -85,13 +86,11 @@ def require_run_info(record, purpose):
     return record.run_info
 
 
-def run_task_of(record, structure=None, world_states=None, horizon=None, stage=0,
-                held_out=False, world_draw=0):
-    """Return the Task of the run (for `structure`, `world_states`, ... when given)."""
+def run_task_of(record, variant=None):
+    """Return the Task of the run (the version `variant`, a core.task.variant.Variant, of it)."""
     info = require_run_info(record, 'rebuilding the task')
     try:
-        return info.task(structure, f'{record.path} (RunInfo.task_yaml)', world_states,
-                         horizon, stage, held_out, world_draw)
+        return info.task(variant, f'{record.path} (RunInfo.task_yaml)')
     except (TaskError, ValueError) as error:
         raise UserError(f'{record.path}: the task recorded in the bag cannot be rebuilt: '
                         f'{error}') from None
@@ -310,6 +309,13 @@ class RecordedDesign:
     held_out: bool = False       # evaluated on the held-out worlds (a hierarchy check)
     world_draw: int = 0          # its resampled worlds (Candidate.world_draw); 0: the fixed ones
 
+    @property
+    def variant(self):
+        """Return the Variant of the run's task it was evaluated on (its Candidate's fields)."""
+        return Variant(structure=tuple(self.structure), world_states=int(self.world_states),
+                       horizon=float(self.horizon), stage=int(self.stage),
+                       held_out=bool(self.held_out), world_draw=int(self.world_draw))
+
 
 def recorded_design(record, candidate_id):
     """Return the RecordedDesign of candidate_id, or raise UserError when it is not recorded."""
@@ -356,9 +362,7 @@ def recorded_design(record, candidate_id):
 
 def design_task(record, design):
     """Return the Task with which a RecordedDesign was evaluated."""
-    return run_task_of(record, design.structure or None, design.world_states or None,
-                       design.horizon or None, design.stage, design.held_out,
-                       design.world_draw)
+    return run_task_of(record, design.variant)
 
 
 def last_summary(record):

@@ -37,6 +37,7 @@ from hand_codesign.core.experiments.robustness import evaluate_robustness
 from hand_codesign.core.sim.worlds import grid_world_states
 from hand_codesign.core.sim.worlds import randomized_quantities
 from hand_codesign.core.sim.worlds import world_states
+from hand_codesign.core.task.variant import Variant
 from hand_codesign.errors import UserError
 from hand_codesign.outputs import staged
 import numpy as np
@@ -61,7 +62,7 @@ def robustness_command(arguments):
     if bests:
         return structures_command(record, bests, arguments.samples, workers, out)
     design = records.recorded_design(record, records.best_candidate_id(record))
-    task = records.run_task_of(record, design.structure or None)
+    task = records.run_task_of(record, Variant(structure=tuple(design.structure)))
     worlds, how = robustness_worlds(task, arguments.samples)
     print(f'evaluating candidate {design.candidate_id} (generation {design.generation}, '
           f'structure {list(design.structure)}) on {len(worlds)} world states ({how}) with '
@@ -91,7 +92,7 @@ def structures_command(record, bests, samples, workers, out):
     reports = []
     for structure, candidate_id in bests:
         design = records.recorded_design(record, candidate_id)
-        task = records.run_task_of(record, structure)
+        task = records.run_task_of(record, Variant(structure=tuple(structure)))
         worlds, how = robustness_worlds(task, samples)
         print(f'structure {list(structure)}: evaluating its best design, candidate '
               f'{candidate_id}, on {len(worlds)} world states ({how}) with {workers} processes')

@@ -26,24 +26,25 @@ def float_list(values):
     return np.asarray(values, dtype=float).ravel().tolist()
 
 
-def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, attempt,
-                      world_states=0, design=None):
+def candidate_message(run_id, candidate, genome_names, evaluator_id, attempt, design=None):
     """
     Return the Candidate message sending an optimizer's candidate to an evaluator.
 
-    world_states: 0 evaluates it on the run's worlds; more for a hierarchy structure's check.
+    The candidate's Variant (core.task.variant) travels in the message's flat fields
+    (structure, world_states, horizon, stage, held_out_worlds, world_draw), which
+    core.run.evaluation_jobs.candidate_variant reads back into one Variant.
     design: its core.sim.physical.PhysicalDesign, for evaluators that do not decode genomes.
     """
+    variant = candidate.variant
     message = Candidate(
         run_id=run_id, generation=int(candidate.generation),
         candidate_id=int(candidate.candidate_id),
         evaluator_id=evaluator_id, attempt=int(attempt),
-        structure=[int(joints) for joints in structure], genome=float_list(candidate.x),
-        horizon=float(getattr(candidate, 'horizon', 0.0)),
-        genome_names=list(genome_names), world_states=int(world_states),
-        stage=int(getattr(candidate, 'stage', 0)),
-        held_out_worlds=bool(getattr(candidate, 'held_out', False)),
-        world_draw=int(getattr(candidate, 'world_draw', 0)))
+        structure=[int(joints) for joints in variant.structure], genome=float_list(candidate.x),
+        horizon=float(variant.horizon),
+        genome_names=list(genome_names), world_states=int(variant.world_states),
+        stage=int(variant.stage), held_out_worlds=bool(variant.held_out),
+        world_draw=int(variant.world_draw))
     if design is not None:
         message.design_names = list(design.names)
         message.design_values = list(design.values)

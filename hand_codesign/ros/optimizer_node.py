@@ -121,10 +121,9 @@ class OptimizerNode(Node):
             self.run.evaluated(*key, message.objectives, message.wall_time,
                                message.outcome_names, message.outcomes)
 
-    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states, design):
+    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, design):
         self.publish(topics.CANDIDATES, self.signer.candidate(candidate_message(
-            self.run.run_id, candidate, candidate.structure, genome_names, evaluator_id,
-            attempt, world_states, design)))
+            self.run.run_id, candidate, genome_names, evaluator_id, attempt, design)))
 
     def send_summary(self, summary):
         message = summary_message(self.run.run_id, summary)

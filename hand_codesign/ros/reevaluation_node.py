@@ -87,12 +87,11 @@ class ReevaluationNode(Node):
         fields = self.run_fields
         for candidate in self.planned:
             task = run_task(fields['task_yaml'], f'run {fields["run_id"]} task', fields['seed'],
-                            fields['iterations'], fields['population'],
-                            candidate.world_states or fields['world_states'],
-                            candidate.structure, candidate.horizon or None)
+                            fields['iterations'], fields['population'], fields['world_states'],
+                            candidate.variant)
             self.publishers_[topics.CANDIDATES].publish(candidate_message(
-                fields['run_id'], candidate, candidate.structure, candidate.genome_names, '',
-                0, candidate.world_states, candidate_design(task, candidate.x)))
+                fields['run_id'], candidate, candidate.genome_names, '', 0,
+                candidate_design(task, candidate.x)))
         self.sent = True
 
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import json
 from typing import Tuple
 
+from hand_codesign.core.task.variant import Variant
 import numpy as np
 
 RUN_FIELDS = ('run_id', 'task_name', 'task_yaml', 'seed', 'algorithm', 'iterations',
@@ -31,6 +32,12 @@ class PlannedCandidate:
     horizon: float
     x: Tuple[float, ...]
     genome_names: Tuple[str, ...]
+
+    @property
+    def variant(self):
+        """Return the Variant of the run's task it was evaluated on (as its plan records it)."""
+        return Variant(structure=tuple(self.structure), world_states=int(self.world_states),
+                       horizon=float(self.horizon))
 
 
 def plan_text(run, designs, suffix='rig'):

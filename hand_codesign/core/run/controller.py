@@ -5,7 +5,7 @@ A RunController owns the run's Search, a Dispatcher, the results of the batch in
 the summaries. It is driven by what the optimizer hears (`heard_from` a heartbeat,
 `evaluated`, `rejected`) and by `tick()`, and answers through an outbox with four methods:
 
-    send_candidate(candidate, evaluator_id, attempt, genome_names, world_states, design)
+    send_candidate(candidate, evaluator_id, attempt, genome_names, design)
                                    # design: its core.sim.physical.PhysicalDesign (SI units)
     send_summary(summary)          # a core.run.summary mapping; the last one has final=True;
                                    # its 'best_design' holds the best design so far as
@@ -208,12 +208,10 @@ class RunController:
             if self.adaptive_timeout and self.wall_times:
                 self.dispatcher.evaluation_timeout = max(
                     ADAPTIVE_MINIMUM, ADAPTIVE_FACTOR * max(self.wall_times))
-            world_states = (self.search.batch_task.num_world_states
-                            if self.search.checking and self.search.hierarchical else 0)
             for candidate, evaluator_id, attempt in self.dispatcher.assignments(self.clock()):
                 self.attempts[candidate.candidate_id] = attempt + 1
                 self.outbox.send_candidate(candidate, evaluator_id, attempt, self.genome_names,
-                                           world_states, self._physical(candidate))
+                                           self._physical(candidate))
             self._take_unauditable()
             if self.dispatcher.unfinished or self.audits.holding:
                 return
@@ -248,8 +246,8 @@ class RunController:
         told_ids = [candidate.candidate_id for candidate in self.batch]
         objectives = np.array([objectives_of(self.results[candidate_id])
                                for candidate_id in told_ids])
-        generation, horizon = self.batch[0].generation, self.batch[0].horizon
-        stage = self.batch[0].stage
+        generation, variant = self.batch[0].generation, self.batch[0].variant
+        horizon, stage = variant.horizon, variant.stage
         self.batch = None
         elapsed = self.clock() - self.started
         result = self.search.summary_result(optimizer)

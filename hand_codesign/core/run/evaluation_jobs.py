@@ -24,6 +24,7 @@ from typing import Optional, Sequence
 from hand_codesign.core.run.runs import engine_version, run_task
 from hand_codesign.core.run.signing import run_digest
 from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.variant import Variant
 import numpy as np
 
 RUN_INFO_WAIT = 10.0
@@ -43,23 +44,25 @@ class EvaluationJob:
 
 
 def job_key(candidate):
-    """Return the fields of a Candidate that decide its task (with the run's RunInfo)."""
-    return (candidate.run_id, tuple(candidate.structure), candidate.world_states,
-            candidate.horizon, _stage(candidate), _held_out(candidate), _world_draw(candidate))
+    """Return (run id, Variant): what decides a Candidate message's task, with its RunInfo."""
+    return candidate.run_id, candidate_variant(candidate)
 
 
-def _stage(candidate):
-    # a Candidate message of a sender older than the field has none: a single-stage task
-    return int(getattr(candidate, 'stage', 0))
+def candidate_variant(candidate):
+    """
+    Return the Variant a Candidate message (or anything with its fields) is evaluated on.
 
-
-def _held_out(candidate):
-    return bool(getattr(candidate, 'held_out_worlds', getattr(candidate, 'held_out', False)))
-
-
-def _world_draw(candidate):
-    # 0 (the run's fixed worlds) from a sender older than the field, as for `stage`
-    return int(getattr(candidate, 'world_draw', 0))
+    The message carries the Variant's fields flat (msg_defs/Candidate.msg); a sender older
+    than a field leaves it out, which means the field's default: a single-stage task (stage),
+    the run's worlds (held_out_worlds), the run's fixed worlds (world_draw).
+    """
+    return Variant(structure=tuple(int(joints) for joints in candidate.structure),
+                   world_states=int(candidate.world_states),
+                   horizon=float(candidate.horizon),
+                   stage=int(getattr(candidate, 'stage', 0)),
+                   held_out=bool(getattr(candidate, 'held_out_worlds',
+                                         getattr(candidate, 'held_out', False))),
+                   world_draw=int(getattr(candidate, 'world_draw', 0)))
 
 
 def check_engine(run):
@@ -76,9 +79,7 @@ def candidate_task(run, candidate):
     check_engine(run)
     try:
         task = run_task(run.task_yaml, f'run {run.run_id} task', run.seed, run.iterations,
-                        run.population, candidate.world_states or run.world_states,
-                        tuple(candidate.structure) or None, candidate.horizon,
-                        _stage(candidate), _held_out(candidate), _world_draw(candidate),
+                        run.population, run.world_states, candidate_variant(candidate),
                         getattr(run, 'engine', ''))
         return task, genome_spec(task)
     except ValueError as error:

@@ -17,11 +17,23 @@ from hand_codesign.core.task.parts import ENGINES
 VERSIONED_PACKAGES = ['hand_codesign', 'pybullet', 'cma', 'deap', 'numpy']
 
 
-def run_task(task_yaml, source, seed, iterations, population, world_states, structure=None,
-             horizon=None, stage=0, held_out=False, world_draw=0, engine=''):
-    """Return the Task of a run from its task text and overrides (0 or None keeps the file's)."""
+def run_task(task_yaml, source, seed, iterations, population, world_states, variant=None,
+             engine=''):
+    """
+    Return the Task of a run from its task text and overrides (0 or None keeps the file's).
+
+    Args:
+        task_yaml: the task file's text as the run loaded it (RunInfo.task_yaml).
+        source: what names the text in errors, e.g. 'run ID task'.
+        seed, iterations, population, world_states: the run's overrides (RunInfo's fields).
+        variant: the core.task.variant.Variant of a candidate (None: the run's task itself).
+        engine: the run's physics engine ('pybullet' or 'mujoco'; '': the task file's).
+
+    Returns the validated Task. Raises TaskError (a ValueError) for a text or an override
+    the task does not accept, ValueError for an unknown engine.
+    """
     return with_overrides(parse_task(task_yaml, source=source), seed, iterations, population,
-                          world_states, structure, horizon, stage, held_out, world_draw, engine)
+                          world_states, variant, engine)
 
 
 def load_run_task(path, seed=None, iterations=None, population=None, world_states=None,
@@ -42,15 +54,12 @@ def engine_version(engine):
         return f'{engine}==unknown'
 
 
-def with_overrides(task, seed, iterations, population, world_states, structure=None,
-                   horizon=None, stage=0, held_out=False, world_draw=0, engine=''):
+def with_overrides(task, seed, iterations, population, world_states, variant=None, engine=''):
     """
     Return task with a run's overrides applied (0 or None keeps the task's value).
 
-    `horizon` (s) is a candidate's sub-problem (Candidate.horizon, core.search.horizon); `stage`
-    and
-    `held_out` are a candidate's stage and world stream (Candidate.stage, held_out_worlds);
-    `world_draw` its resampled worlds (Candidate.world_draw; 0: the run's fixed worlds);
+    `variant` (a core.task.variant.Variant: structure, world states, horizon, stage, held-out
+    worlds, resampled draw) says which version of the run's task a candidate is evaluated on;
     `engine` the run's physics engine (RunInfo.engine; '' or None: the task file's).
     """
     changes = {'seed': int(seed)}
@@ -64,16 +73,8 @@ def with_overrides(task, seed, iterations, population, world_states, structure=N
         changes['population'] = int(population)
     if world_states:
         changes['num_world_states'] = int(world_states)
-    if structure:
-        changes['structure'] = tuple(int(joints) for joints in structure)
-    if horizon:
-        changes['horizon'] = float(horizon)
-    if stage:
-        changes['stage'] = int(stage)
-    if held_out:
-        changes['held_out'] = True
-    if world_draw:
-        changes['world_draw'] = int(world_draw)
+    if variant is not None:
+        changes.update(variant.task_changes())
     return task.replace(**changes)
 
 

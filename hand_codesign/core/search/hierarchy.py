@@ -63,6 +63,7 @@ from hand_codesign.core.search.factory import make_optimizer
 from hand_codesign.core.search.optimizers import (Candidate, derived_seed, OptimizerError,
                                                   OptimizerResult, STATE_FORMAT, TellError)
 from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.variant import Variant
 import numpy as np
 
 Structure = Tuple[int, ...]
@@ -312,7 +313,7 @@ class HierarchySearch:
             return []
         if self._check is not None:
             return [self._check]
-        return [dataclasses.replace(candidate, structure=self.structure)
+        return [dataclasses.replace(candidate, variant=Variant(structure=self.structure))
                 for candidate in self._optimizer.ask()]
 
     def tell(self, results):

@@ -38,6 +38,7 @@ from deap import base as deap_base
 from deap import cma as deap_cma
 from deap import tools as deap_tools
 from hand_codesign.core.search.pycma import cma
+from hand_codesign.core.task.variant import Variant
 import numpy as np
 
 SIGMA0 = 0.1
@@ -71,16 +72,18 @@ class ReplayError(OptimizerError):
 
 @dataclasses.dataclass(frozen=True)
 class Candidate:
-    """One design to evaluate: its id (unique within a run), generation and normalized genome."""
+    """
+    One design to evaluate: its id (unique within a run), generation and normalized genome.
+
+    `variant` says which version of the run's task it is evaluated on (core.task.variant: its
+    structure, worlds, horizon, stage, held-out worlds, resampled draw); the search sets it,
+    the run's task itself until then.
+    """
 
     candidate_id: int
     generation: int
     x: np.ndarray
-    structure: tuple = ()  # joints per finger; set by the hierarchy, () for a single structure
-    horizon: float = 0.0  # s, the sub-problem it is evaluated on (core.search.horizon); 0: none
-    stage: int = 0  # of a two-stage task (search.stages): 1 nominal world, 2 randomized; 0: none
-    held_out: bool = False  # evaluated on the held-out worlds (a hierarchy structure's check)
-    world_draw: int = 0  # its worlds' draw (core.sim.worlds; worlds.resample); 0: the fixed worlds
+    variant: Variant = Variant()
 
 
 @dataclasses.dataclass(frozen=True)

@@ -23,6 +23,7 @@ from hand_codesign.core.search.horizon import Horizon
 from hand_codesign.core.search.resampling import ResampledSearch
 from hand_codesign.core.search.stages import StagedSearch
 from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.variant import Variant
 
 
 class Search:
@@ -101,15 +102,19 @@ class Search:
         return history[generation] if generation < len(history) else self._horizon.current
 
     def ask(self):
-        """Return the next batch, each candidate with its structure (the same until told)."""
+        """Return the next batch, each candidate with its Variant (the same until told)."""
         if self._batch is None:
             task = self.batch_task
             horizon = self.horizon or 0.0
-            self._batch = [dataclasses.replace(candidate, structure=task.structure,
-                                               horizon=horizon, stage=task.stage,
-                                               held_out=task.held_out,
-                                               world_draw=task.world_draw)
-                           for candidate in self._driver.ask()]
+            candidates = self._driver.ask()
+            # a hierarchy structure's check evaluates on its own number of worlds
+            world_states = (self.batch_task.num_world_states
+                            if self.checking and self.hierarchical else 0)
+            variant = Variant(structure=task.structure, world_states=world_states,
+                              horizon=horizon, stage=task.stage, held_out=task.held_out,
+                              world_draw=task.world_draw)
+            self._batch = [dataclasses.replace(candidate, variant=variant)
+                           for candidate in candidates]
         return list(self._batch)
 
     def tell(self, results):
