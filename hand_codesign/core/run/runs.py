@@ -22,14 +22,12 @@ def run_task(task_yaml, source, seed, iterations, population, world_states, vari
     """
     Return the Task of a run from its task text and overrides (0 or None keeps the file's).
 
-    Args:
-        task_yaml: the task file's text as the run loaded it (RunInfo.task_yaml).
-        source: what names the text in errors, e.g. 'run ID task'.
-        seed, iterations, population, world_states: the run's overrides (RunInfo's fields).
-        variant: the core.task.variant.Variant of a candidate (None: the run's task itself).
-        engine: the run's physics engine ('pybullet' or 'mujoco'; '': the task file's).
-
-    Returns the validated Task. Raises TaskError (a ValueError) for a text or an override
+    `task_yaml` is the task file's text as the run loaded it (RunInfo.task_yaml), `source` what
+    names it in errors (e.g. 'run ID task'); `seed`, `iterations`, `population` and
+    `world_states` are the run's overrides (RunInfo's fields); `variant`, a
+    core.task.variant.Variant, makes it the version of the run's task a candidate is evaluated
+    on (None: the run's task itself); `engine` is the run's physics engine ('pybullet' or
+    'mujoco'; '': the task file's). Raises TaskError (a ValueError) for a text or override
     the task does not accept, ValueError for an unknown engine.
     """
     return with_overrides(parse_task(task_yaml, source=source), seed, iterations, population,
