@@ -132,8 +132,21 @@ def evaluate(x, task, worlds: Optional[Sequence] = None, on_world=None) -> 'Eval
     """
     Return the Evaluation of normalized genome x on `task` (default worlds: the task's).
 
+    x: the normalized genome, array-like of shape (genome_spec(task).size,), values folded
+    into [0, 1] (outside values are mirrored back, never rejected). task: a core.task.Task,
+    whose physics.engine chooses the simulator. worlds: WorldStates (core.sim.worlds) to
+    evaluate on, default world_states(task), the task's num_world_states training worlds.
     `on_world(index, simulator)`, if given, is called before each world's rollout: a caller
     that must stay responsive (an evaluator's heartbeats) does its chores there.
+
+    The Evaluation holds `objectives` (shape (objectives,), in task.objective_names' order:
+    position errors in m, orientation errors in rad, eq. 5 over the worlds with the torque
+    penalty), `fitness` (their sum weighted by task.objective_weights), `world_objectives`
+    (shape (worlds, objectives)), `initial_errors` and `final_errors` (shape (worlds, 2): m,
+    rad), `final_poses` (shape (worlds, 7): m, then a quaternion x, y, z, w), the simulated
+    time (s), the count of unstable worlds and whether the design starts in collision (every
+    objective then COLLISION_PENALTY). Deterministic: the same x, task and worlds give the same
+    bits in any process. Raises ValueError for a genome of the wrong size.
     """
     design = _TaskContext.of(task).genome_spec().decode(np.asarray(x, dtype=float))
     return evaluate_design(design, task, worlds, on_world=on_world)

@@ -17,6 +17,12 @@ def make_optimizer(task, dim, first_id=0, seed_x=None, seed=None):
     """
     Return the optimizer of task.algorithm for a genome of `dim` normalized values.
 
+    task: a core.task.Task; dim: the genome's size (genome_spec(task).size); first_id: the id
+    of its first candidate; seed_x: a normalized genome of shape (dim,) to start from; seed: the
+    optimizer's seed instead of task.seed. Returns an ask/tell optimizer
+    (core.search.optimizers.AskTellOptimizer). Raises OptimizerError for an algorithm not in
+    the registry or settings it cannot take.
+
     cma and mocma are core.search.optimizers'; ipop-cma and bipop-cma (CMA-ES with restarts, which
     also take task.restart_stagnation) are core.search.restarts'; cma-mae and cma-me (quality
     diversity, which also take task.archive and the task's design descriptors)

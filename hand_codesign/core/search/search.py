@@ -27,7 +27,19 @@ from hand_codesign.core.task.variant import Variant
 
 
 class Search:
-    """The search of a task: its optimizer, or a HierarchySearch when the task has one."""
+    """
+    The search of a task: its optimizer, or a HierarchySearch when the task has one.
+
+    Search(task, first_id=0) takes a core.task.Task (the run's, after its overrides) and the
+    id of its first candidate (a resumed run continues the ids). Driven as an ask/tell
+    optimizer: `ask()` returns the batch, a list of core.search.optimizers.Candidate (an id, a
+    generation, a normalized genome of shape (genome_spec(batch_task).size,) and the Variant
+    of the task it is evaluated on); `batch_task` is that Task; `tell({id: objectives})` takes
+    every candidate's objective vector (shape (objectives,), or an Evaluation); `stop()`
+    returns why it ended ({} while it goes on). `tell` raises TellError
+    (core.search.optimizers) for results that miss or add candidates of the batch; building
+    the search raises OptimizerError for an algorithm or a setting its optimizer cannot take.
+    """
 
     def __init__(self, task, first_id=0):
         self.task = task

@@ -30,7 +30,13 @@ import yaml
 
 
 def load_task(path):
-    """Read and validate a task file; raise TaskError naming the file and key on a mistake."""
+    """
+    Read and validate a task file: return its Task (core.task.spec), a frozen value.
+
+    path: a YAML task file (the schema and its SI units: hand_codesign.core.task). Raises
+    TaskError (a ValueError) with one line naming the file, the dotted key and what was
+    expected, for a file that cannot be read, is not UTF-8 or YAML, or breaks the schema.
+    """
     try:
         with open(path, encoding='utf-8') as stream:
             text = stream.read()
@@ -43,7 +49,13 @@ def load_task(path):
 
 
 def parse_task(text, source='<task>'):
-    """Validate YAML text into a Task; `source` names it in errors and resolves seed files."""
+    """
+    Validate YAML text into a Task (core.task.spec), as load_task does for a file.
+
+    text: the YAML of a task; source: what names it in errors (a path or 'run ID task'),
+    also the folder a seed design's file is read from. The Task keeps the text as
+    `source_text`. Raises TaskError naming source, the dotted key and what was expected.
+    """
     try:
         document = yaml.safe_load(text)
     except yaml.YAMLError as error:
