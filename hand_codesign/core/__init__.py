@@ -1,10 +1,17 @@
 """
 Pure-Python core of hand_codesign: tasks, hand model, simulation, objectives, optimizers.
 
+Its rooms (docs/ARCHITECTURE.md): task/ (the schema, reading, checks, genome, Variant), sim/
+(hand, worlds, policies, objectives, the PyBullet and MuJoCo engines), search/ (optimizers and
+their registry, hierarchy, stages, horizon, resampling, resume), run/ (what the optimizer
+node decides), rig/ (hardware in the loop) and experiments/ (the paper's experiments and their
+measures); at the root evaluate() and the shared vocabulary (contract, design, rotations,
+outcomes).
+
 The names below are loaded on first use (PEP 562), not when the package is imported: the
 simulator imports PyBullet, which silences the process's standard streams while it loads, and
 the optimizer or an analysis never simulate. ``import hand_codesign.core.task`` loads the task
-module alone; ``hand_codesign.core.evaluate`` loads the simulator when it is first touched.
+room alone; ``hand_codesign.core.evaluate`` loads the simulator when it is first touched.
 """
 
 import importlib
