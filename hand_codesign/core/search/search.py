@@ -23,7 +23,6 @@ from hand_codesign.core.search.horizon import Horizon
 from hand_codesign.core.search.resampling import ResampledSearch
 from hand_codesign.core.search.stages import StagedSearch
 from hand_codesign.core.task.genome import genome_spec
-from hand_codesign.core.task.variant import Variant
 
 
 class Search:
@@ -122,9 +121,8 @@ class Search:
             # a hierarchy structure's check evaluates on its own number of worlds
             world_states = (self.batch_task.num_world_states
                             if self.checking and self.hierarchical else 0)
-            variant = Variant(structure=task.structure, world_states=world_states,
-                              horizon=horizon, stage=task.stage, held_out=task.held_out,
-                              world_draw=task.world_draw)
+            variant = dataclasses.replace(task.variant, structure=task.structure,
+                                          world_states=world_states, horizon=horizon)
             self._batch = [dataclasses.replace(candidate, variant=variant)
                            for candidate in candidates]
         return list(self._batch)

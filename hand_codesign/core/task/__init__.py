@@ -174,9 +174,10 @@ holding the last one afterwards.
 # The task room: its parts (parts), the Task (spec), its reader (reader, built on values,
 # settings_reader and design_reader), its cross-field rules (checks), the genome a task's
 # bounds define (genome), the descriptors of a design on them (descriptors) and the Variant
-# of a task a candidate is evaluated on (variant). This face is the import path users know; the room's modules import each other
-# by their own paths, never through this face, so loading it cannot run in a circle. The room
-# imports only core's root modules (design, rotations, outcomes) besides its own.
+# of a task a candidate is evaluated on (variant). This face is the import path users know;
+# the room's modules import each other by their own paths, never through this face, so loading
+# it cannot run in a circle. The room imports only core's root modules (design, rotations,
+# outcomes) besides its own.
 from hand_codesign.core.rotations import axis_angle_quaternion
 from hand_codesign.core.task.parts import (ALGORITHMS, ArchiveSpec, AXES, Bounds, DISTANCES,
                                            EarlyTerminationSpec, GoalSpec, HandSpec, HierarchySpec,

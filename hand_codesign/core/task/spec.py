@@ -15,7 +15,11 @@ from hand_codesign.core.task.parts import (ArchiveSpec, EarlyTerminationSpec, Go
                                            HierarchySpec, MorphologySpec, ObjectSpec, PhysicsSpec,
                                            PolicySpec, RandomizationSpec, TaskError,
                                            TorquePenaltySpec, WeightsSpec, WorldsSpec)
+from hand_codesign.core.task.variant import Variant
 import numpy as np
+
+# the coordinates of its Variant a Task reads and replace() changes by name
+VARIANT_COORDINATES = ('horizon', 'stage', 'held_out', 'world_draw')
 
 
 @dataclass(frozen=True)
@@ -50,22 +54,15 @@ class Task:
     early_termination: Optional[EarlyTerminationSpec] = None
     hierarchy: Optional[HierarchySpec] = None
     seed_design: Optional[Design] = None
-    # Not in the YAML: the horizon (s) of the sub-problem a candidate is evaluated on, set by
-    # the search (hand_codesign.core.search.horizon) and carried in its Candidate message; None:
-    # none.
-    horizon: Optional[float] = None
     # YAML `two_stage: true`: stage 1 optimizes on the nominal world only, stage 2 with the
     # randomization, starting from stage 1's result (core.search.stages).
     two_stage: bool = False
-    # Not in the YAML, set by the search and carried in the Candidate message like `horizon`:
-    # the stage a candidate belongs to (0: a single-stage task; 1: the nominal world only; 2:
-    # the randomized worlds), and held_out: the worlds are drawn from the held-out stream
-    # (core.sim.worlds), disjoint from the training worlds, for a hierarchy structure's check.
-    stage: int = 0
-    held_out: bool = False
-    # Not in the YAML either, carried in Candidate.world_draw: 0 evaluates on the run's fixed
-    # worlds, k >= 1 on the k-th resampled draw (core.sim.worlds; worlds.resample: generation).
-    world_draw: int = 0
+    # Not in the YAML: which version of the run's task this is (core.task.variant), set by the
+    # search and carried in the Candidate message: its horizon, stage, held-out worlds and
+    # resampled draw (read as task.horizon, task.stage, task.held_out, task.world_draw). The
+    # variant's structure and world states are applied to `structure` and `num_world_states`,
+    # so here they stay () and 0.
+    variant: Variant = Variant()
     description: str = ''
     source: str = '<task>'
     source_text: str = ''
@@ -87,13 +84,41 @@ class Task:
         return np.array([self.weights.position] * len(self.goals.position)
                         + [self.weights.orientation] * len(self.goals.orientation))
 
+    @property
+    def horizon(self):
+        """Return the sub-problem's horizon in seconds it is evaluated on, or None for none."""
+        return self.variant.horizon if self.variant.horizon else None
+
+    @property
+    def stage(self):
+        """Return its stage: 0 a single-stage task, 1 the nominal world, 2 the randomized."""
+        return self.variant.stage
+
+    @property
+    def held_out(self):
+        """Return whether its worlds come from the held-out stream (core.sim.worlds)."""
+        return self.variant.held_out
+
+    @property
+    def world_draw(self):
+        """Return its worlds' draw: 0 the run's fixed worlds, k >= 1 the k-th resampled one."""
+        return self.variant.world_draw
+
     def replace(self, **changes):
         """
         Return a copy with some fields changed, validated like a loaded task.
 
         Typical: task.replace(seed=3, iterations=5, population=8, num_world_states=4,
-        structure=(1, 2)). source_text stays the text as loaded.
+        structure=(1, 2)). `horizon` (None: none), `stage`, `held_out` and `world_draw` change
+        its variant. source_text stays the text as loaded.
         """
+        coordinates = {name: changes.pop(name) for name in VARIANT_COORDINATES
+                       if name in changes}
+        if coordinates:
+            if coordinates.get('horizon', 0.0) is None:
+                coordinates['horizon'] = 0.0
+            variant = changes.get('variant', self.variant)
+            changes['variant'] = dataclasses.replace(variant, **coordinates)
         unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
         if unknown:
             raise TaskError(f'{self.source}: {unknown[0]}: not a Task field')

@@ -9,7 +9,9 @@ A Variant says which, in one value: the search gives one to every candidate
 (core.search.optimizers.Candidate.variant), the Candidate message carries its fields
 (ros.conversions maps them to and from the message's flat fields, so bags keep their format),
 the evaluator keys the tasks it builds by it (core.run.evaluation_jobs.job_key) and
-`core.run.runs.run_task` applies it to the run's task.
+`core.run.runs.run_task` applies it to the run's task: its structure and world states to the
+task's own fields, the rest to `Task.variant`, the one field of a Task that its YAML has no key
+for.
 """
 
 from dataclasses import dataclass
@@ -35,18 +37,19 @@ class Variant:
     world_draw: int = 0
 
     def task_changes(self):
-        """Return the Task.replace changes that make the run's task this version of it."""
+        """
+        Return the Task.replace changes that make the run's task this version of it.
+
+        Structure and world states go to the task's own fields (a default keeps the task's);
+        the other coordinates become the task's variant, which the YAML has no key for.
+        """
         changes = {}
         if self.structure:
             changes['structure'] = tuple(int(joints) for joints in self.structure)
         if self.world_states:
             changes['num_world_states'] = int(self.world_states)
-        if self.horizon:
-            changes['horizon'] = float(self.horizon)
-        if self.stage:
-            changes['stage'] = int(self.stage)
-        if self.held_out:
-            changes['held_out'] = True
-        if self.world_draw:
-            changes['world_draw'] = int(self.world_draw)
+        coordinates = Variant(horizon=float(self.horizon), stage=int(self.stage),
+                              held_out=bool(self.held_out), world_draw=int(self.world_draw))
+        if coordinates != Variant():
+            changes['variant'] = coordinates
         return changes
