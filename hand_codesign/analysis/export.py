@@ -39,6 +39,7 @@ from hand_codesign.core.sim.hand import hand_urdf
 from hand_codesign.core.task import parse_design
 from hand_codesign.core.task import TaskError
 from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.variant import Variant
 from hand_codesign.errors import UserError
 from hand_codesign.outputs import staged
 import numpy as np
@@ -272,7 +273,7 @@ def load_export(folder):
                         int(task_document.get('iterations') or 0),
                         int(task_document.get('population') or 0),
                         int(task_document.get('world_states') or 0),
-                        task_document.get('structure'),
+                        Variant(structure=tuple(task_document.get('structure') or ())),
                         engine=str(task_document.get('engine') or ''))
     except (TaskError, ValueError, TypeError) as error:
         raise UserError(f'{path}: task: cannot rebuild the task: {error}') from None

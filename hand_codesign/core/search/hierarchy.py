@@ -398,7 +398,7 @@ class HierarchySearch:
     def _ask_check(self):
         result = self._best_result()
         self._check = Candidate(self._optimizer.next_id, self._optimizer.generation, result.x,
-                                self.structure)
+                                Variant(structure=self.structure))
 
     def _grown(self):
         """Return the structures grown from the best outcomes of the most fingers (module doc)."""
