@@ -246,7 +246,8 @@ def test_resting_on_a_limit_while_touching_matches_the_final_state():
 TINY = """
     import sys
     from hand_codesign.cli import main
-        from hand_codesign.core.experiments.catalog import Budget, Configuration, Experiment
+    from hand_codesign.core.experiments import catalog
+    from hand_codesign.core.experiments.catalog import Budget, Configuration, Experiment
     from hand_codesign.core.experiments.measures import Tolerance
     catalog.EXPERIMENTS['tiny'] = Experiment(
         'tiny', 'two small Task 5 runs',
