@@ -23,13 +23,13 @@ import os
 import time
 
 from hand_codesign.core.evaluate import evaluate, evaluate_design, shared_simulator
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.hand import hand_model
-from hand_codesign.core.objectives import goal_schedule
-from hand_codesign.core.policies import make_policy
-from hand_codesign.core.sim import object_shape
+from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.objectives import goal_schedule
+from hand_codesign.core.sim.policies import make_policy
+from hand_codesign.core.sim.pybullet_sim import object_shape
+from hand_codesign.core.sim.worlds import object_state, world_states
 from hand_codesign.core.task import load_task
-from hand_codesign.core.worlds import object_state, world_states
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 import psutil
 

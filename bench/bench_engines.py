@@ -24,10 +24,10 @@ import time
 
 from bench_physics import searched_designs, spearman
 from hand_codesign.core.evaluate import evaluate, shared_simulator
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.hand import hand_model
+from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.worlds import object_state, world_states
 from hand_codesign.core.task import load_task
-from hand_codesign.core.worlds import object_state, world_states
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 
 TASKS = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config', 'tasks')

@@ -7,7 +7,8 @@ many distinct objective vectors they had (rounded to 6 significant digits), the 
 weighted fitness among them and the best fitness of the generation:
 
 - `plain`: early termination at every check, as the task says without a horizon (eq. 6);
-- `horizon`: the task's early_termination.horizon (core.horizon: no stop inside the horizon);
+- `horizon`: the task's early_termination.horizon (core.search.horizon: no stop inside the
+horizon);
 - `horizon-stops`: the same horizons, but stopping at every check inside the horizon too.
 
 At the end it evaluates each run's best design on the plain task and on the whole rollout
@@ -23,11 +24,11 @@ import dataclasses
 import pathlib
 import sys
 
-from hand_codesign.core import objectives as objectives_module
 from hand_codesign.core import TaskError
 from hand_codesign.core.evaluate import COLLISION_PENALTY, evaluate
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.search import Search
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.search.search import Search
+from hand_codesign.core.sim import objectives as objectives_module
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

@@ -23,7 +23,7 @@ import time
 
 from hand_codesign.core import genome_spec, load_task, TaskError
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.optimizers import CmaEs, MoCmaEs
+from hand_codesign.core.search.optimizers import CmaEs, MoCmaEs
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

@@ -5,7 +5,7 @@ Runs the seed designs of config/tasks/task1.yaml and task2.yaml (hands with segm
 0.5 kg) with their keyframes and the gains set to points of Table I's ranges, in three forms
 of eq. (1) at the task's step:
   explicit   eq. (1) applied as it stands (PDPolicy(stable=False))
-  stable     the stable form of hand_codesign/core/policies.py (the default)
+  stable     the stable form of hand_codesign/core/sim/policies.py (the default)
   damping    only the damping taken implicitly: Kv replaced by Kv / (1 + Kv dt) (an
              alternative, defined here)
 and as the reference eq. (1) explicit at a ten times finer step (dt / 10 is explicitly
@@ -31,12 +31,12 @@ import dataclasses
 import os
 import time
 
-from hand_codesign.core.hand import hand_model
-from hand_codesign.core.objectives import goal_schedule, weighted_fitness
-from hand_codesign.core.policies import PDPolicy
-from hand_codesign.core.sim import object_shape, Simulator
+from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.objectives import goal_schedule, weighted_fitness
+from hand_codesign.core.sim.policies import PDPolicy
+from hand_codesign.core.sim.pybullet_sim import object_shape, Simulator
+from hand_codesign.core.sim.worlds import object_state, world_states
 from hand_codesign.core.task import load_task
-from hand_codesign.core.worlds import object_state, world_states
 import numpy as np
 
 TASKS = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config', 'tasks')

@@ -2,8 +2,8 @@
 Benchmark of the optimizer's cost of a Candidate's physical design against its evaluation.
 
 Every Candidate carries its design in SI units, its standard URDF and its controller
-(core.physical.candidate_design, called once per candidate by core.controller). Measures that
-per candidate, the Candidate message built and serialized with and without it, and as the
+(core.sim.physical.candidate_design, called once per candidate by core.run.controller). Measures
+that per candidate, the Candidate message built and serialized with and without it, and as the
 reference, measured in the same run, one evaluation of the same candidates with
 core.evaluate on the task's world states. Prints the costs and their ratio to the evaluation.
 
@@ -18,8 +18,9 @@ import time
 
 from hand_codesign.core import genome_spec, load_task, TaskError
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.optimizers import Candidate
-from hand_codesign.core.physical import candidate_design
+from hand_codesign.core.search.optimizers import Candidate
+from hand_codesign.core.sim.physical import candidate_design
+from hand_codesign.core.task.variant import Variant
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -51,14 +52,14 @@ def main(argv=None):
     generator = np.random.default_rng(0)
     genomes = [spec.initial_mean() + 0.2 * generator.normal(size=spec.size)
                for _ in range(arguments.candidates)]
-    candidates = [Candidate(candidate_id=index, generation=0, x=x, structure=task.structure)
+    candidates = [Candidate(candidate_id=index, generation=0, x=x,
+                            variant=Variant(structure=task.structure))
                   for index, x in enumerate(genomes)]
     designs = [candidate_design(task, x) for x in genomes]   # warm up
     physical = per_item(lambda x: candidate_design(task, x), genomes)
 
     def message(candidate, design=None):
-        return serialize_message(candidate_message('run', candidate, task.structure,
-                                                   spec.names, '', 0, 0, design))
+        return serialize_message(candidate_message('run', candidate, spec.names, '', 0, design))
 
     per_item(message, candidates)   # warm up the message classes and the serializer
     bare = per_item(message, candidates)

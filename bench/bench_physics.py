@@ -30,11 +30,11 @@ import time
 from bench_core import bare_loop
 from bench_pybullet_build import build_pybullet, measure
 from hand_codesign.core.evaluate import evaluate, shared_simulator
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.objectives import goal_schedule
-from hand_codesign.core.optimizers import make_optimizer
-from hand_codesign.core.robustness import evaluate_robustness
+from hand_codesign.core.experiments.robustness import evaluate_robustness
+from hand_codesign.core.search.factory import make_optimizer
+from hand_codesign.core.sim.objectives import goal_schedule
 from hand_codesign.core.task import load_task, PhysicsSpec
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 
 TASK_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config', 'tasks',

@@ -42,7 +42,7 @@ def worker(genomes_file, rounds):
     """In the child process: time the bare loop and evaluate() per candidate; print JSON."""
     from bench_core import bare_loop
     from hand_codesign.core.evaluate import evaluate, shared_simulator
-    from hand_codesign.core.objectives import goal_schedule
+    from hand_codesign.core.sim.objectives import goal_schedule
     from hand_codesign.core.task import load_task
     import pybullet
     task = load_task(TASK_FILE)

@@ -3,7 +3,7 @@ Cost of signing: HMAC-SHA256 over the canonical bytes of a message against its C
 
 Measures, in one run, per message of a Task 5 run (24 genes, one objective, 64 worlds):
 - rclpy's CDR serialization of the Candidate and of the Evaluation (what DDS does anyway);
-- the optimizer signing a Candidate and checking an Evaluation (core.signing);
+- the optimizer signing a Candidate and checking an Evaluation (core.run.signing);
 - an evaluator checking a Candidate and signing its Evaluation.
 Prints microseconds per message and the ratio of signing and checking to serializing.
 
@@ -13,8 +13,8 @@ Usage: python bench/bench_signing.py [--repeat 2000]
 import argparse
 import time
 
-from hand_codesign.core.signing import new_secret
-from hand_codesign.core.signing import RunKeys
+from hand_codesign.core.run.signing import new_secret
+from hand_codesign.core.run.signing import RunKeys
 from hand_codesign.ros.keys import OptimizerSigner
 from hand_codesign.ros.keys import sign_evaluation
 from hand_codesign_msgs.msg import Candidate

@@ -8,7 +8,7 @@ Measures, in one run on the Task 5 scene:
 - the system's rate with 1 and with 2 evaluators: `hand-codesign run` as separate processes
   (recorder, evaluators, optimizer over DDS), physics steps of the evaluations told to the
   search over the wall time from the first candidate sent to the last evaluation received.
-  Audit evaluations (a second evaluator checking an answer, hand_codesign.core.audits) are
+  Audit evaluations (a second evaluator checking an answer, hand_codesign.core.run.audits) are
   cost, not progress: their steps are not counted, their time is. The run's own evaluators
   are audited once each (their first answer); `--audit-fraction 0` leaves even that out.
 Prints the ratio of the 2-evaluator rate to twice the raw rate (target >= 0.95 at Table I's
@@ -46,7 +46,7 @@ from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.records import evaluation_rows
 from hand_codesign.analysis.records import stepping_rate
 from hand_codesign.core.evaluate import shared_simulator
-from hand_codesign.core.objectives import goal_schedule
+from hand_codesign.core.sim.objectives import goal_schedule
 from hand_codesign.core.task import load_task
 import numpy as np
 

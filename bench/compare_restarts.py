@@ -3,8 +3,8 @@ CMA-ES against IPOP-CMA-ES (and BIPOP-CMA-ES) on Rastrigin's function in 10-D, s
 
 Rastrigin's function has a local minimum near every integer point; CMA-ES with a small
 population settles in one of them, a restart with a larger population sees the global bowl
-(Auger and Hansen 2005). Each algorithm runs as the co-design runs it (`core.optimizers`,
-`core.restarts`: the normalized space, step size 0.1, the same budget of iterations x
+(Auger and Hansen 2005). Each algorithm runs as the co-design runs it (`core.search.optimizers`,
+`core.search.restarts`: the normalized space, step size 0.1, the same budget of iterations x
 population evaluations, plain CMA-ES stopping early on pycma's own criteria) over a few seeds;
 the function is shifted so that the start point, the centre, is not its optimum:
 
@@ -23,8 +23,8 @@ Measured here with the defaults (about 40 s): median best CMA-ES 14.9 (it stops 
 
 import argparse
 
-from hand_codesign.core.optimizers import CmaEs
-from hand_codesign.core.restarts import BipopCmaEs, IpopCmaEs
+from hand_codesign.core.search.optimizers import CmaEs
+from hand_codesign.core.search.restarts import BipopCmaEs, IpopCmaEs
 import numpy as np
 
 ALGORITHMS = (('CMA-ES', CmaEs), ('IPOP-CMA-ES', IpopCmaEs), ('BIPOP-CMA-ES', BipopCmaEs))

@@ -14,7 +14,7 @@ from hand_codesign.version import version_text
 
 # verb -> (module, function, one-line help); the function takes the parsed arguments.
 VERBS = {
-    'check': ('hand_codesign.check', 'check_command',
+    'check': ('hand_codesign.commands.check', 'check_command',
               'validate a task file and show what a run of it would do, without simulating'),
     'run': ('hand_codesign.commands.run', 'run_command',
             'run a co-design as ROS 2 processes and record it to a bag'),

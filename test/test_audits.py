@@ -1,9 +1,9 @@
 """Audits without ROS: a run with a lying evaluator ends as the run without it."""
 
-from hand_codesign.core.audits import Audits
-from hand_codesign.core.audits import drawn
-from hand_codesign.core.controller import RunController
 from hand_codesign.core.outcomes import Answer
+from hand_codesign.core.run.audits import Audits
+from hand_codesign.core.run.audits import drawn
+from hand_codesign.core.run.controller import RunController
 import numpy as np
 import pytest
 from test_controller import Clock

@@ -12,7 +12,7 @@ import subprocess
 import sys
 
 from hand_codesign import cli
-from hand_codesign.core.signing import RunKeys
+from hand_codesign.core.run.signing import RunKeys
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

@@ -8,10 +8,10 @@ import sys
 from hand_codesign.cli import main
 from hand_codesign.core import genome_spec, load_task, world_states
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.hierarchy import HierarchySearch
-from hand_codesign.core.objectives import goal_schedule
-from hand_codesign.core.robustness import world_values
-from hand_codesign.core.worlds import object_state, QUANTITIES
+from hand_codesign.core.experiments.robustness import world_values
+from hand_codesign.core.search.hierarchy import HierarchySearch
+from hand_codesign.core.sim.objectives import goal_schedule
+from hand_codesign.core.sim.worlds import object_state, QUANTITIES
 import numpy as np
 import pytest
 import yaml

@@ -3,11 +3,11 @@
 import json
 import pathlib
 
-from hand_codesign.core.controller import RunController
-from hand_codesign.core.controller import write_result
-from hand_codesign.core.resume import rebuild_search
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.search import Search
+from hand_codesign.core.run.controller import RunController
+from hand_codesign.core.run.controller import write_result
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.search.resume import rebuild_search
+from hand_codesign.core.search.search import Search
 import numpy as np
 import yaml
 
@@ -41,9 +41,9 @@ class Outbox:
         self.lines = []        # (level, text)
         self.result = None
 
-    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states,
-                       design):
-        self.candidates.append((candidate, evaluator_id, attempt, genome_names, world_states))
+    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, design):
+        self.candidates.append((candidate, evaluator_id, attempt, genome_names,
+                                candidate.variant.world_states))
 
     def send_summary(self, summary):
         self.summaries.append(summary)
@@ -236,7 +236,7 @@ def test_a_hierarchy_checks_each_structure_on_its_evaluation_worlds():
     seeds = plain_loop(task).outcomes[0].seeds
     assert check_lines[0].startswith(f'structure [1] (optimized with seeds {seeds[0]}, '
                                      f'{seeds[1]}): best design on the held-out worlds')
-    assert all(candidate.held_out for candidate, _, _, _, w in sent_all if w)
+    assert all(candidate.variant.held_out for candidate, _, _, _, w in sent_all if w)
     best, structure = plain_loop(task).best
     assert outbox.result['best_candidate_id'] == best.candidate_id
     assert outbox.result['structure'] == list(structure)
@@ -262,7 +262,7 @@ def test_a_two_stage_run_resumed_in_stage_two_ends_as_the_uninterrupted_run():
     clock = Clock()
     controller, outbox = start(task, clock, resumed=point)
     sent = outbox.candidates
-    assert {c.stage for c, _, _, _, _ in sent} == {2}
+    assert {c.variant.stage for c, _, _, _, _ in sent} == {2}
     assert first.candidate_id not in [c.candidate_id for c, _, _, _, _ in sent]
     answer_everything(controller, outbox, size, clock)
     assert outbox.result['best_candidate_id'] == uninterrupted.candidate_id
@@ -283,10 +283,10 @@ def test_a_resampled_run_sends_each_generations_draw_and_reports_its_final_check
         sent_all += sent
         for candidate, evaluator, _, _, _ in sent:
             # the objectives depend on the draw: each is easier than the one before
-            offset = 1.0 / candidate.world_draw if candidate.world_draw else 0.0
+            offset = 1.0 / candidate.variant.world_draw if candidate.variant.world_draw else 0.0
             controller.evaluated(RUN, candidate.candidate_id, evaluator,
                                  objectives_of(candidate.x, 2) + offset, 0.1)
-    draws = {candidate.candidate_id: candidate.world_draw for candidate, *_ in sent_all}
+    draws = {candidate.candidate_id: candidate.variant.world_draw for candidate, *_ in sent_all}
     assert [draws[i] for i in range(20)] == [1] * 6 + [2] * 6 + [3] * 6 + [0, 0]
     assert all(world_states == 0 for *_, world_states in sent_all)  # the run's count
     result = outbox.result

@@ -4,13 +4,14 @@ import dataclasses
 import pathlib
 
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.optimizers import Candidate as CoreCandidate
-from hand_codesign.core.optimizers import OptimizerResult
-from hand_codesign.core.physical import candidate_design
-from hand_codesign.core.physical import design_from_physical
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.summary import generation_summary
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.run.summary import generation_summary
+from hand_codesign.core.search.optimizers import Candidate as CoreCandidate
+from hand_codesign.core.search.optimizers import OptimizerResult
+from hand_codesign.core.sim.physical import candidate_design
+from hand_codesign.core.sim.physical import design_from_physical
+from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.variant import Variant
 from hand_codesign.ros.conversions import candidate_message
 from hand_codesign.ros.conversions import evaluation_message
 from hand_codesign.ros.conversions import rejection_message
@@ -31,7 +32,7 @@ def through_the_wire(message):
 
 def core_candidate():
     return CoreCandidate(candidate_id=12, generation=2, x=np.linspace(0.0, 1.0, 24),
-                         structure=(2, 2))
+                         variant=Variant(structure=(2, 2)))
 
 
 def test_a_candidate_message_carries_the_design_that_rebuilds_it():
@@ -39,7 +40,7 @@ def test_a_candidate_message_carries_the_design_that_rebuilds_it():
     candidate = core_candidate()
     physical = candidate_design(task, candidate.x)
     message = through_the_wire(candidate_message(
-        'run-1', candidate, (2, 2), [f'g{i}' for i in range(24)], '', 0, 0, physical))
+        'run-1', candidate, [f'g{i}' for i in range(24)], '', 0, physical))
     assert message.hand_urdf == physical.urdf
     assert (message.controller_kind, message.controller_mode) == ('torque', 'constant')
     assert list(message.controller_knot_times) == list(physical.knot_times)
@@ -51,19 +52,20 @@ def test_a_candidate_message_carries_the_design_that_rebuilds_it():
 
 
 def test_a_candidate_message_carries_genome_structure_and_worlds():
+    checked = dataclasses.replace(core_candidate(), variant=Variant(structure=(2, 2),
+                                                                    world_states=64))
     message = through_the_wire(candidate_message(
-        'run-1', core_candidate(), (2, 2), [f'g{i}' for i in range(24)], 'evaluator-1', 3,
-        world_states=64))
+        'run-1', checked, [f'g{i}' for i in range(24)], 'evaluator-1', 3))
     assert (message.run_id, message.candidate_id, message.generation) == ('run-1', 12, 2)
     assert (message.evaluator_id, message.attempt, message.world_states) == (
         'evaluator-1', 3, 64)
     assert list(message.structure) == [2, 2]
     assert np.array_equal(np.asarray(message.genome), core_candidate().x)
     assert list(message.genome_names)[:2] == ['g0', 'g1']
-    plain = candidate_message('run-1', core_candidate(), (2, 2), [], '', 0)
+    plain = candidate_message('run-1', core_candidate(), [], '', 0)
     assert plain.world_states == 0 and plain.world_draw == 0
-    drawn = dataclasses.replace(core_candidate(), world_draw=5)
-    assert through_the_wire(candidate_message('run-1', drawn, (2, 2), [], '', 0)).world_draw == 5
+    drawn = dataclasses.replace(core_candidate(), variant=Variant(structure=(2, 2), world_draw=5))
+    assert through_the_wire(candidate_message('run-1', drawn, [], '', 0)).world_draw == 5
 
 
 def test_an_evaluation_message_holds_the_core_evaluation_bit_for_bit():

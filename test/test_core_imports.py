@@ -15,9 +15,10 @@ def run_python(code):
     return result.stdout.strip()
 
 
-@pytest.mark.parametrize('module', ['task', 'genome', 'search', 'optimizers', 'hierarchy',
-                                    'dispatch', 'runs', 'summary', 'objectives', 'worlds',
-                                    'design', 'policies'])
+@pytest.mark.parametrize('module', ['task', 'task.genome', 'search.search', 'search.optimizers',
+                                    'search.factory', 'search.hierarchy', 'run.dispatch',
+                                    'run.runs', 'run.summary', 'sim.objectives', 'sim.worlds',
+                                    'design', 'sim.policies'])
 def test_modules_that_do_not_simulate_leave_pybullet_unloaded(module):
     printed = run_python(f"""
         import sys
@@ -53,12 +54,12 @@ def test_evaluate_is_reachable_from_the_package_and_loads_the_simulator():
 
 def test_evaluate_stays_the_function_after_its_module_was_imported_first():
     printed = run_python("""
-        import hand_codesign.core.robustness  # imports the submodule core.evaluate
+        import hand_codesign.core.experiments.robustness  # imports the submodule core.evaluate
         from hand_codesign.core import evaluate, Simulator
-        from hand_codesign.core import optimizers
+        from hand_codesign.core.search import optimizers
         print(type(evaluate).__name__, Simulator.__name__, optimizers.__name__)
     """)
-    assert printed == 'function Simulator hand_codesign.core.optimizers'
+    assert printed == 'function Simulator hand_codesign.core.search.optimizers'
 
 
 def test_unknown_name_is_an_attribute_error():

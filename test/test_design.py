@@ -4,8 +4,8 @@ import pathlib
 
 from hand_codesign.core.design import ControllerDesign
 from hand_codesign.core.design import Design
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 
 TASK = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'tasks' / 'task5.yaml'

@@ -2,8 +2,8 @@
 
 from dataclasses import dataclass
 
-from hand_codesign.core.dispatch import Dispatcher
-from hand_codesign.core.dispatch import DispatchError
+from hand_codesign.core.run.dispatch import Dispatcher
+from hand_codesign.core.run.dispatch import DispatchError
 import pytest
 
 

@@ -4,12 +4,12 @@ import dataclasses
 import pathlib
 
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.evaluation_jobs import CandidateRejected
-from hand_codesign.core.evaluation_jobs import evaluation_job
-from hand_codesign.core.evaluation_jobs import EvaluatorInbox
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.runs import engine_version, load_run_task
-from hand_codesign.core.worlds import world_states
+from hand_codesign.core.run.evaluation_jobs import CandidateRejected
+from hand_codesign.core.run.evaluation_jobs import evaluation_job
+from hand_codesign.core.run.evaluation_jobs import EvaluatorInbox
+from hand_codesign.core.run.runs import engine_version, load_run_task
+from hand_codesign.core.sim.worlds import world_states
+from hand_codesign.core.task.genome import genome_spec
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import RunInfo
 import numpy as np

@@ -7,9 +7,9 @@ from hand_codesign.analysis.export import load_export
 from hand_codesign.analysis.export import resimulate
 from hand_codesign.analysis.records import recorded_design
 from hand_codesign.cli import main
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.hand import build_hand
-from hand_codesign.core.hand import hand_model
+from hand_codesign.core.sim.hand import build_hand
+from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.errors import UserError
 import numpy as np
 import pybullet

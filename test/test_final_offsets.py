@@ -6,9 +6,9 @@ import subprocess
 import sys
 
 from hand_codesign.analysis.campaign import final_design
-from hand_codesign.core.measures import (measure_worlds, summarize, Tolerance,
-                                         unseen_world_states)
-from hand_codesign.core.robustness import start_and_goal_poses
+from hand_codesign.core.experiments.measures import (measure_worlds, summarize, Tolerance,
+                                                     unseen_world_states)
+from hand_codesign.core.experiments.robustness import start_and_goal_poses
 import numpy as np
 
 TOOL = pathlib.Path(__file__).resolve().parents[1] / 'tools' / 'final_offsets.py'

@@ -28,11 +28,11 @@ from analysis_run import TASK
 from hand_codesign.analysis import records
 from hand_codesign.cli import main
 from hand_codesign.core import contract
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.geometry import design_shapes
-from hand_codesign.core.geometry import goal_poses
-from hand_codesign.core.worlds import object_state
-from hand_codesign.core.worlds import world_states
+from hand_codesign.core.sim.geometry import design_shapes
+from hand_codesign.core.sim.geometry import goal_poses
+from hand_codesign.core.sim.worlds import object_state
+from hand_codesign.core.sim.worlds import world_states
+from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.ros import topics
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
@@ -55,7 +55,7 @@ def marker_positions(markers, groups=DRAWN):
 
 
 def shape_positions(shapes, groups=DRAWN):
-    """Return the same mapping for core.geometry Shapes, numbered as the conversion does."""
+    """Return the same mapping for core.sim.geometry Shapes, numbered as the conversion does."""
     counts, result = {}, {}
     for shape in shapes:
         number = counts[shape.group] = counts.get(shape.group, -1) + 1

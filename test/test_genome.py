@@ -6,8 +6,8 @@ import pathlib
 
 from hand_codesign.core import (decode, genome_spec, load_task, objective_names, parse_task,
                                 TaskError)
-from hand_codesign.core.genome import fold, seed_genome
-from hand_codesign.core.optimizers import make_optimizer
+from hand_codesign.core.search.factory import make_optimizer
+from hand_codesign.core.task.genome import fold, seed_genome
 import numpy as np
 import pytest
 

@@ -1,19 +1,19 @@
-"""core.geometry: the shapes a viewer draws are where the simulated hand, object and goals are."""
+"""core.sim.geometry: what a viewer draws is where the simulated hand, object and goals are."""
 
 import math
 import pathlib
 
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.geometry import design_shapes
-from hand_codesign.core.geometry import goal_poses
-from hand_codesign.core.geometry import hand_shapes
-from hand_codesign.core.geometry import link_frames
-from hand_codesign.core.geometry import rotate
-from hand_codesign.core.hand import hand_model
-from hand_codesign.core.sim import Simulator
+from hand_codesign.core.sim.geometry import design_shapes
+from hand_codesign.core.sim.geometry import goal_poses
+from hand_codesign.core.sim.geometry import hand_shapes
+from hand_codesign.core.sim.geometry import link_frames
+from hand_codesign.core.sim.geometry import rotate
+from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.pybullet_sim import Simulator
+from hand_codesign.core.sim.worlds import object_state
+from hand_codesign.core.sim.worlds import WorldState
 from hand_codesign.core.task import load_task
-from hand_codesign.core.worlds import object_state
-from hand_codesign.core.worlds import WorldState
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 import pytest
 

@@ -4,7 +4,7 @@ import math
 import xml.etree.ElementTree as ElementTree
 
 from hand_codesign.core.design import FingerDesign, HandDesign, JointDesign
-from hand_codesign.core.hand import build_hand, hand_model, hand_urdf
+from hand_codesign.core.sim.hand import build_hand, hand_model, hand_urdf
 from hand_codesign.core.task import HandSpec
 import numpy as np
 import pybullet

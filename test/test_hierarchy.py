@@ -4,12 +4,12 @@ import dataclasses
 import pathlib
 
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.hierarchy import (
-    all_structures, bottom_up_path, evaluate_candidates, HierarchyError, HierarchySearch,
-    run_hierarchy, transitions)
-from hand_codesign.core.optimizers import replay, TellError
+from hand_codesign.core.search.hierarchy import (all_structures, bottom_up_path,
+                                                 evaluate_candidates, HierarchyError,
+                                                 HierarchySearch, run_hierarchy, transitions)
+from hand_codesign.core.search.optimizers import replay, TellError
+from hand_codesign.core.sim.worlds import world_states
 from hand_codesign.core.task import load_task, parse_task
-from hand_codesign.core.worlds import world_states
 import numpy as np
 import pytest
 

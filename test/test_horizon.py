@@ -13,11 +13,12 @@ from hand_codesign.analysis.resume import resume_point
 from hand_codesign.cli import main
 from hand_codesign.core import TaskError
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.horizon import Horizon
-from hand_codesign.core.objectives import goal_schedule
-from hand_codesign.core.optimizers import replay
-from hand_codesign.core.runs import load_run_task, run_task
-from hand_codesign.core.search import Search
+from hand_codesign.core.run.runs import load_run_task, run_task
+from hand_codesign.core.search.horizon import Horizon
+from hand_codesign.core.search.optimizers import replay
+from hand_codesign.core.search.search import Search
+from hand_codesign.core.sim.objectives import goal_schedule
+from hand_codesign.core.task.variant import Variant
 from hand_codesign.ros import topics
 from hand_codesign.ros.mcap_writer import message_definition
 from mcap_ros2.writer import Writer
@@ -144,11 +145,11 @@ def test_task3_spreads_more_with_a_horizon():
     rebuilt = Search(task)
     assert replay(rebuilt, recorded) == 10
     assert rebuilt.horizons == search.horizons
-    assert [c.horizon for c in rebuilt.ask()] == [search.horizon] * 12
+    assert [c.variant.horizon for c in rebuilt.ask()] == [search.horizon] * 12
     # an evaluator building the task from the Candidate's horizon computes the same numbers
     candidate = rebuilt.ask()[0]
-    evaluator_task = run_task(task.source_text, 'run task', 2, 10, 12, 4, None,
-                              candidate.horizon)
+    evaluator_task = run_task(task.source_text, 'run task', 2, 10, 12, 4,
+                              Variant(horizon=candidate.variant.horizon))
     assert np.array_equal(evaluate(candidate.x, evaluator_task).objectives,
                           evaluate(candidate.x, rebuilt.batch_task).objectives)
 
@@ -208,7 +209,7 @@ def test_a_horizon_run_is_recorded_replayed_and_resumed(tmp_path, capsys):
         and message.candidate_id not in third))
     point = resume_point(cut)
     assert point.search.horizons == rebuilt.horizons[:3]
-    assert {c.horizon for c in point.pending} == {rebuilt.horizons[3]}
+    assert {c.variant.horizon for c in point.pending} == {rebuilt.horizons[3]}
     assert set(point.known) == set(third)
 
 
@@ -222,7 +223,7 @@ def test_a_bag_from_before_the_horizon_reads_as_without_one(tmp_path):
             type_name = topics.type_name(type(message))
             definition = '\n'.join(line for line in message_definition(type_name).splitlines()
                                    if 'horizon' not in line and 'sub-problem' not in line
-                                   and 'hand_codesign.core.horizon' not in line)
+                                   and 'hand_codesign.core.search.horizon' not in line)
             schema = writer.register_msgdef(type_name, definition)
             writer.write_message('/' + topic, schema, message, log_time=index + 1)
         writer.finish()

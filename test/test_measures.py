@@ -1,5 +1,5 @@
 """
-core.measures on small real rollouts: whole motions, the pose error, joint limits found.
+core.experiments.measures on small real rollouts: motions, the pose error, joint limits found.
 
 What a campaign reports of a design must not read better than the rollout it measures: a
 world is read at the end of the whole motion (never where early termination stopped it),
@@ -13,13 +13,14 @@ import pathlib
 
 from hand_codesign.analysis import campaign
 from hand_codesign.core.evaluate import _TaskContext, evaluate_design
-from hand_codesign.core.experiments import ORIENTATION_01, PLANE_5MM, POSE
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.measures import (LIMITS_FOUND_MIN_SHARE, LIMITS_FOUND_SHARE,
-                                         measure_worlds, summarize, unseen_world_states,
-                                         with_pose_error, WorldMeasures)
+from hand_codesign.core.experiments.catalog import ORIENTATION_01, PLANE_5MM, POSE
+from hand_codesign.core.experiments.measures import (LIMITS_FOUND_MIN_SHARE, LIMITS_FOUND_SHARE,
+                                                     measure_worlds, summarize,
+                                                     unseen_world_states, with_pose_error,
+                                                     WorldMeasures)
 from hand_codesign.core.outcomes import fingers, LIMIT_TOLERANCE
 from hand_codesign.core.task import load_task
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

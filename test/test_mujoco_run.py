@@ -7,9 +7,9 @@ from analysis_run import run_cli
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.export import load_export
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.geometry import link_frames
-from hand_codesign.core.hand import hand_model
-from hand_codesign.core.runs import engine_version
+from hand_codesign.core.run.runs import engine_version
+from hand_codesign.core.sim.geometry import link_frames
+from hand_codesign.core.sim.hand import hand_model
 import mujoco
 import numpy as np
 import pytest

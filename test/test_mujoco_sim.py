@@ -8,13 +8,13 @@ from hand_codesign.analysis.replay import rollout_poses
 from hand_codesign.core import genome_spec, load_task, Simulator, world_states
 from hand_codesign.core.design import ControllerDesign, FingerDesign, JointDesign
 from hand_codesign.core.evaluate import evaluate, evaluate_design
-from hand_codesign.core.geometry import link_frames
-from hand_codesign.core.hand import hand_model
-from hand_codesign.core.mujoco_sim import (_geom_size, ARENA_BYTES, hand_spec, MujocoSimulator,
-                                           object_inertia)
-from hand_codesign.core.objectives import COLLISION_PENALTY, goal_schedule
-from hand_codesign.core.policies import make_policy
-from hand_codesign.core.worlds import object_state, WorldState
+from hand_codesign.core.sim.geometry import link_frames
+from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.mujoco_sim import (_geom_size, ARENA_BYTES, hand_spec, MujocoSimulator,
+                                               object_inertia)
+from hand_codesign.core.sim.objectives import COLLISION_PENALTY, goal_schedule
+from hand_codesign.core.sim.policies import make_policy
+from hand_codesign.core.sim.worlds import object_state, WorldState
 import mujoco
 import numpy as np
 import pytest

@@ -4,11 +4,11 @@ import math
 import pathlib
 
 from hand_codesign.core import load_task, parse_task
-from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
-                                           orientation_angle, position_distance,
-                                           torque_penalty, weighted_fitness)
 from hand_codesign.core.rotations import axis_angle_quaternion, quaternion_multiply, slerp
-from hand_codesign.core.worlds import object_state, WorldState
+from hand_codesign.core.sim.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
+                                               orientation_angle, position_distance,
+                                               torque_penalty, weighted_fitness)
+from hand_codesign.core.sim.worlds import object_state, WorldState
 import numpy as np
 import pytest
 import yaml

@@ -9,14 +9,16 @@ import sys
 
 from deap import tools as deap_tools
 from hand_codesign.core import load_task, world_states
-from hand_codesign.core import optimizers
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.genome import genome_spec, seed_genome
-from hand_codesign.core.optimizers import (
-    Candidate, closest_to_zero, CmaEs, least_hypervolume_contributor, make_optimizer, MoCmaEs,
-    non_dominated, OptimizerError, replay, ReplayError, TellError)
-from hand_codesign.core.quality_diversity import CmaMae, CmaMe
-from hand_codesign.core.restarts import BipopCmaEs, IpopCmaEs
+from hand_codesign.core.search import optimizers
+from hand_codesign.core.search.factory import make_optimizer
+from hand_codesign.core.search.optimizers import (Candidate, closest_to_zero, CmaEs,
+                                                  least_hypervolume_contributor, MoCmaEs,
+                                                  non_dominated, OptimizerError, replay,
+                                                  ReplayError, TellError)
+from hand_codesign.core.search.quality_diversity import CmaMae, CmaMe
+from hand_codesign.core.search.restarts import BipopCmaEs, IpopCmaEs
+from hand_codesign.core.task.genome import genome_spec, seed_genome
 import numpy as np
 import pytest
 
@@ -24,8 +26,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK5 = ROOT / 'config' / 'tasks' / 'task5.yaml'
 PINNED_TASK5 = ROOT / 'config' / 'reproduce' / 'task5.yaml'
 SHIFT = np.linspace(0.2, 0.8, 10)
-# every ask/tell optimizer, CMA-ES with restarts (core.restarts) and quality-diversity search
-# (core.quality_diversity) included
+# every ask/tell optimizer, CMA-ES with restarts (core.search.restarts) and quality-diversity
+# search (core.search.quality_diversity) included
 ALGORITHMS = [CmaEs, MoCmaEs, IpopCmaEs, BipopCmaEs, CmaMae, CmaMe]
 
 
@@ -167,7 +169,7 @@ import pickle, sys
 import numpy as np
 sys.path.insert(0, {test_dir!r})
 from test_optimizers import run, zdt1
-from hand_codesign.core.optimizers import AskTellOptimizer
+from hand_codesign.core.search.optimizers import AskTellOptimizer
 optimizer = AskTellOptimizer.from_state(open({state!r}, 'rb').read())
 asked = run(optimizer, zdt1)
 pickle.dump([(c.candidate_id, c.generation, c.x) for c in asked], open({out!r}, 'wb'))
@@ -361,7 +363,7 @@ def test_asking_stop_often_does_not_change_the_run():
 # Imports the optimizers, checks that plotting and statistics were left out, then imports them.
 QUICK_IMPORT = """
 import sys
-from hand_codesign.core import optimizers
+from hand_codesign.core.search import optimizers
 assert 'matplotlib' not in sys.modules and 'scipy' not in sys.modules, 'imported'
 import matplotlib.pyplot
 import scipy.stats

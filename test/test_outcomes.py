@@ -1,14 +1,14 @@
-"""Outcome descriptors: measured in evaluate's own rollouts, as core.measures measures them."""
+"""Outcome descriptors: measured in evaluate's rollouts as core.experiments.measures does."""
 
 import dataclasses
 
 from hand_codesign.core.evaluate import evaluate, evaluate_design
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.measures import frame_interval, measure_worlds
-from hand_codesign.core.objectives import goal_schedule
+from hand_codesign.core.experiments.measures import frame_interval, measure_worlds
 from hand_codesign.core.outcomes import Answer, CONTACT_DISTANCE, OutcomeWatch, task_outcomes
-from hand_codesign.core.task_spec import ArchiveSpec
-from hand_codesign.core.worlds import world_states
+from hand_codesign.core.sim.objectives import goal_schedule
+from hand_codesign.core.sim.worlds import world_states
+from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.parts import ArchiveSpec
 import numpy as np
 import pytest
 from test_sim import design, task, with_fingers  # noqa: F401 - fixtures of the Task 5 scene

@@ -15,12 +15,12 @@ import pathlib
 
 from hand_codesign.core import parse_task
 from hand_codesign.core.evaluate import evaluate_design
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.objectives import combine_worlds, goal_schedule, orientation_angle
 from hand_codesign.core.rotations import quaternion_conjugate, quaternion_multiply, slerp
-from hand_codesign.core.sim import Simulator
+from hand_codesign.core.sim.objectives import combine_worlds, goal_schedule, orientation_angle
+from hand_codesign.core.sim.pybullet_sim import Simulator
+from hand_codesign.core.sim.worlds import object_state, world_states
 from hand_codesign.core.task import resting_height
-from hand_codesign.core.worlds import object_state, world_states
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 import pytest
 import yaml

@@ -4,8 +4,8 @@ import dataclasses
 import math
 
 from hand_codesign.core.design import ControllerDesign, FingerDesign, HandDesign, JointDesign
-from hand_codesign.core.hand import build_hand, hand_model
-from hand_codesign.core.policies import make_policy, PDPolicy, TorquePolicy
+from hand_codesign.core.sim.hand import build_hand, hand_model
+from hand_codesign.core.sim.policies import make_policy, PDPolicy, TorquePolicy
 from hand_codesign.core.task import HandSpec, PolicySpec
 import numpy as np
 import pybullet

@@ -16,14 +16,15 @@ from hand_codesign.analysis import records
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.cli import main
 from hand_codesign.core import load_task
-from hand_codesign.core.descriptors import DESCRIPTORS, DesignDescriptors
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.optimizers import (AskTellOptimizer, Candidate, make_optimizer,
-                                           OptimizerError, replay, TellError)
 from hand_codesign.core.outcomes import Answer
-from hand_codesign.core.quality_diversity import CmaMae, CmaMe
-from hand_codesign.core.task_spec import DESCRIPTOR_NAMES
+from hand_codesign.core.search.factory import make_optimizer
+from hand_codesign.core.search.optimizers import (AskTellOptimizer, Candidate, OptimizerError,
+                                                  replay, TellError)
+from hand_codesign.core.search.quality_diversity import CmaMae, CmaMe
+from hand_codesign.core.task.descriptors import DESCRIPTORS, DesignDescriptors
+from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.parts import DESCRIPTOR_NAMES
 import numpy as np
 import pytest
 from task_files import optimizer_document, write_task as write_task_file
@@ -94,7 +95,7 @@ import pickle, sys
 sys.path.insert(0, {test_dir!r})
 from test_quality_diversity import sphere
 from test_optimizers import run
-from hand_codesign.core.optimizers import AskTellOptimizer
+from hand_codesign.core.search.optimizers import AskTellOptimizer
 optimizer = AskTellOptimizer.from_state(open({state!r}, 'rb').read())
 rows = [(c.candidate_id, c.generation, c.x) for c in run(optimizer, sphere)]
 elites = [(e.candidate_id, e.cell, e.fitness) for e in optimizer.elites()]

@@ -11,8 +11,8 @@ from bag_samples import sample_messages
 from bag_samples import write_bag
 from hand_codesign.analysis.report import default_report_dir
 from hand_codesign.cli import main
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.runs import run_task
+from hand_codesign.core.run.runs import run_task
+from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.ros import topics
 from hand_codesign.version import version_text
 from mcap.writer import Writer
@@ -61,7 +61,7 @@ def test_report_shows_the_best_design_at_the_start_and_end_of_world_0(report):
 
 def test_design_picture_places_each_shape_at_its_pose():
     from hand_codesign.analysis.design_picture import shape_surfaces
-    from hand_codesign.core.geometry import Shape
+    from hand_codesign.core.sim.geometry import Shape
     from hand_codesign.core.rotations import axis_angle_quaternion
     # a 4 x 2 x 1 cm box turned 90 degrees about z: 2 cm along x, 4 cm along y
     box = Shape('box', 'object', (0.1, 0.2, 0.3), axis_angle_quaternion((0, 0, 1), np.pi / 2),

@@ -20,17 +20,17 @@ import textwrap
 import time
 
 from hand_codesign import cli
-from hand_codesign.analysis import campaign, records
+from hand_codesign.analysis import campaign, records, unseen
 from hand_codesign.commands import reproduce
-from hand_codesign.core import experiments
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.measures import (measure_worlds, shares_in_bands, summarize,
-                                         Tolerance, unseen_world_states)
+from hand_codesign.core.experiments import catalog
+from hand_codesign.core.experiments.measures import (measure_worlds, shares_in_bands, summarize,
+                                                     Tolerance, unseen_world_states)
 from hand_codesign.core.outcomes import fingers, LIMIT_TOLERANCE, resting_on_limit_touching
 from hand_codesign.core.rotations import axis_angle_quaternion, compose
+from hand_codesign.core.sim.worlds import world_states
 from hand_codesign.core.task import load_task, parse_task
-from hand_codesign.core.worlds import world_states
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 import pytest
 
@@ -43,7 +43,7 @@ def test_list_names_every_experiment_first_on_its_line(capsys):
     assert cli.main(['reproduce', '--list']) == 0
     lines = capsys.readouterr().out.splitlines()
     names = [line.split()[0] for line in lines]
-    assert names == experiments.experiment_names()
+    assert names == catalog.experiment_names()
     for name in ('task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded',
                  'all'):
         assert name in names
@@ -55,37 +55,37 @@ def test_unknown_experiment_is_one_line(capsys):
     assert error.count('\n') == 0 and 'task9' in error and 'task5-joint-limits' in error
 
 
-@pytest.mark.parametrize('name', list(experiments.EXPERIMENTS))
+@pytest.mark.parametrize('name', list(catalog.EXPERIMENTS))
 def test_configurations_pin_their_algorithm_and_preset(name):
-    experiment = experiments.EXPERIMENTS[name]
+    experiment = catalog.EXPERIMENTS[name]
     keys = [configuration.key for configuration in experiment.configurations]
     assert len(set(keys)) == len(keys)
     assert set(experiment.budgets) == {'smoke', 'reduced', 'paper'}
     for configuration in experiment.configurations:
-        preset = experiments.pinned_dir() / configuration.preset
-        text = experiments.configuration_task_text(configuration, preset.read_text())
+        preset = catalog.pinned_dir() / configuration.preset
+        text = catalog.configuration_task_text(configuration, preset.read_text())
         task = parse_task(text, source=str(preset))
         assert task.algorithm == configuration.algorithm
         expected = ('CMA-ES', 'MO-CMA-ES') if not experiment.beyond_paper else (
-            experiments.ALGORITHM_NAMES.values())
+            catalog.ALGORITHM_NAMES.values())
         assert configuration.algorithm_name in expected
         if not configuration.options:
             assert text.count('#') == preset.read_text().count('#')  # comments kept
 
 
 def test_all_runs_the_papers_experiments_and_levers_set_their_options():
-    names = [experiment.name for experiment in experiments.paper_experiments()]
+    names = [experiment.name for experiment in catalog.paper_experiments()]
     assert names == ['task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded']
-    levers = experiments.EXPERIMENTS['levers-task5']
+    levers = catalog.EXPERIMENTS['levers-task5']
     assert levers.beyond_paper
     by_key = {configuration.key: configuration for configuration in levers.configurations}
-    preset = experiments.pinned_dir() / 'task5.yaml'
-    worst = parse_task(experiments.configuration_task_text(by_key['cma-worst25'],
+    preset = catalog.pinned_dir() / 'task5.yaml'
+    worst = parse_task(catalog.configuration_task_text(by_key['cma-worst25'],
+                                                       preset.read_text()))
+    resampled = parse_task(catalog.configuration_task_text(by_key['cma-resample'],
                                                            preset.read_text()))
-    resampled = parse_task(experiments.configuration_task_text(by_key['cma-resample'],
-                                                               preset.read_text()))
-    both = parse_task(experiments.configuration_task_text(by_key['cma-worst25-resample'],
-                                                          preset.read_text()))
+    both = parse_task(catalog.configuration_task_text(by_key['cma-worst25-resample'],
+                                                      preset.read_text()))
     paper = parse_task(preset.read_text())
     assert (worst.worlds.aggregate, worst.worlds.fraction) == ('worst', 0.25)
     assert resampled.worlds.resample == 'generation'
@@ -93,19 +93,19 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
         'worst', 0.25, 'generation')
     for task in (worst, resampled, both):  # nothing else changed
         assert task.replace(worlds=paper.worlds, source_text=paper.source_text) == paper
-    along_x = parse_task(experiments.configuration_task_text(
-        by_key['cma-along-x'], (experiments.pinned_dir() / 'task5_along_x.yaml').read_text()))
+    along_x = parse_task(catalog.configuration_task_text(
+        by_key['cma-along-x'], (catalog.pinned_dir() / 'task5_along_x.yaml').read_text()))
     assert [goal.axes for goal in along_x.goals.position] == [('x',)]
     assert along_x.replace(goals=paper.goals, source_text=paper.source_text) == paper
     assert levers.tolerances() == (Tolerance('plane', 0.005), Tolerance('x', 0.005),
                                    Tolerance('y', 0.005))
     # Task 6's hand turned 45 degrees about the vertical, fingers directly opposite, the box's
     # 90-degree symmetry: nothing else changed
-    task6 = parse_task((experiments.pinned_dir() / 'task6.yaml').read_text())
-    diagonal, = [c for c in experiments.EXPERIMENTS['levers-task6'].configurations
+    task6 = parse_task((catalog.pinned_dir() / 'task6.yaml').read_text())
+    diagonal, = [c for c in catalog.EXPERIMENTS['levers-task6'].configurations
                  if c.key == 'cma-diagonal']
-    turned = parse_task(experiments.configuration_task_text(
-        diagonal, (experiments.pinned_dir() / diagonal.preset).read_text()))
+    turned = parse_task(catalog.configuration_task_text(
+        diagonal, (catalog.pinned_dir() / diagonal.preset).read_text()))
     _, palm = compose(((0, 0, 0), axis_angle_quaternion((0, 0, 1), math.pi / 4)),
                       ((0, 0, 0), task6.hand.base_orientation))
     np.testing.assert_allclose(turned.hand.base_orientation, palm, atol=1e-7)
@@ -119,29 +119,29 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
                                   orientation_symmetry=task6.goals.orientation_symmetry),
         source_text=task6.source_text) == task6
     for name in ('levers-task5', 'levers-task6'):  # quality diversity, its archive's defaults
-        mae, = [c for c in experiments.EXPERIMENTS[name].configurations if c.key == 'cma-mae']
-        text = (experiments.pinned_dir() / mae.preset).read_text()
-        task = parse_task(experiments.configuration_task_text(mae, text))
+        mae, = [c for c in catalog.EXPERIMENTS[name].configurations if c.key == 'cma-mae']
+        text = (catalog.pinned_dir() / mae.preset).read_text()
+        task = parse_task(catalog.configuration_task_text(mae, text))
         assert (task.algorithm, task.archive, mae.algorithm_name) == ('cma-mae', None, 'CMA-MAE')
         assert task.replace(algorithm='cma', source_text='') == parse_task(text).replace(
             source_text='')
     # CMA-MAE over the joint-limit span and the outcome limit_rest, on each preset's lever
     for name, key, preset in (('levers-task5', 'cma-mae-limit-rest-along-x', 'task5_along_x'),
                               ('levers-task6', 'cma-mae-limit-rest-diagonal', 'task6_diagonal')):
-        mae, = [c for c in experiments.EXPERIMENTS[name].configurations if c.key == key]
-        text = (experiments.pinned_dir() / f'{preset}.yaml').read_text()
+        mae, = [c for c in catalog.EXPERIMENTS[name].configurations if c.key == key]
+        text = (catalog.pinned_dir() / f'{preset}.yaml').read_text()
         assert mae.preset == f'{preset}.yaml'
-        task = parse_task(experiments.configuration_task_text(mae, text))
+        task = parse_task(catalog.configuration_task_text(mae, text))
         assert task.algorithm == 'cma-mae'
         assert task.archive.descriptors == ('joint_range', 'limit_rest')
         assert task.replace(algorithm='cma', archive=None, source_text='') == parse_task(
             text).replace(source_text='')
     # the probe of the diagonal hand on the smaller half of the boxes: trained and measured
     # there alone, nothing else changed
-    probe, = [c for c in experiments.EXPERIMENTS['levers-task6'].configurations
+    probe, = [c for c in catalog.EXPERIMENTS['levers-task6'].configurations
               if c.key == 'cma-diagonal-smaller-boxes']
-    text = (experiments.pinned_dir() / probe.preset).read_text()
-    task = parse_task(experiments.configuration_task_text(probe, text))
+    text = (catalog.pinned_dir() / probe.preset).read_text()
+    task = parse_task(catalog.configuration_task_text(probe, text))
     scales = [world.scale for world in unseen_world_states(task, 300)]
     assert 0.5 <= min(scales) < 0.55 and 0.95 < max(scales) <= 1.0
     assert task.replace(randomization=parse_task(text).randomization,
@@ -149,17 +149,17 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
     # the fingers placed closer to the box: nothing else changed
     for key, placement in (('cma-diagonal-fingers-60mm', 0.06),
                            ('cma-diagonal-fingers-45mm', 0.045)):
-        closer, = [c for c in experiments.EXPERIMENTS['levers-task6'].configurations
+        closer, = [c for c in catalog.EXPERIMENTS['levers-task6'].configurations
                    if c.key == key]
-        task = parse_task(experiments.configuration_task_text(closer, text))
+        task = parse_task(catalog.configuration_task_text(closer, text))
         assert task.morphology.finger_position_x.values == (-placement, placement)
         pinned = parse_task(text)
         assert task.replace(morphology=pinned.morphology, source_text='') == pinned.replace(
             source_text='')
     reduced = levers.budget('reduced')
     assert (reduced.iterations, reduced.population, reduced.seeds) == (40, 40, 5)
-    assert experiments.training_worlds(by_key['cma'], reduced) == 16
-    assert experiments.training_worlds(by_key['cma'], levers.budget('paper')) == 64
+    assert catalog.training_worlds(by_key['cma'], reduced) == 16
+    assert catalog.training_worlds(by_key['cma'], levers.budget('paper')) == 64
 
 
 def test_unseen_worlds_are_disjoint_from_training_and_nested():
@@ -246,10 +246,10 @@ def test_resting_on_a_limit_while_touching_matches_the_final_state():
 TINY = """
     import sys
     from hand_codesign.cli import main
-    from hand_codesign.core import experiments
-    from hand_codesign.core.experiments import Budget, Configuration, Experiment
-    from hand_codesign.core.measures import Tolerance
-    experiments.EXPERIMENTS['tiny'] = Experiment(
+    from hand_codesign.core.experiments import catalog
+    from hand_codesign.core.experiments.catalog import Budget, Configuration, Experiment
+    from hand_codesign.core.experiments.measures import Tolerance
+    catalog.EXPERIMENTS['tiny'] = Experiment(
         'tiny', 'two small Task 5 runs',
         (Configuration('torque-cma-2w', 'task5.yaml', 'cma', 2, 'torque'),
          Configuration('torque-mocma-16w', 'task5.yaml', 'mocma', 16, 'torque')),
@@ -379,11 +379,11 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
 
     # the convergence figure has a panel for each configuration with runs, none for the rest
     configurations = tuple(
-        experiments.Configuration(key, 'task5.yaml', algorithm, worlds, 'torque')
+        catalog.Configuration(key, 'task5.yaml', algorithm, worlds, 'torque')
         for key, algorithm, worlds in (('torque-cma-2w', 'cma', 2),
                                        ('never-run', 'cma', 2),
                                        ('torque-mocma-16w', 'mocma', 16)))
-    tiny = experiments.Experiment('tiny', '', configurations, tolerance, {})
+    tiny = catalog.Experiment('tiny', '', configurations, tolerance, {})
     panels = campaign.convergence_panels(out, tiny, seeds=(1,))
     assert [label for label, _ in panels] == ['torque-cma-2w (CMA-ES)',
                                               'torque-mocma-16w (MO-CMA-ES)']
@@ -398,10 +398,10 @@ def test_only_names_configurations_of_the_experiment(capsys):
 
 def test_analyze_reports_only_the_errors_of_the_tasks_goals():
     # Task 6's final position is irrelevant: the box's way from its start is no error there
-    rotation = campaign.unseen_tolerances(load_task(ROOT / 'config' / 'tasks' / 'task6.yaml'))
+    rotation = unseen.unseen_tolerances(load_task(ROOT / 'config' / 'tasks' / 'task6.yaml'))
     assert [tolerance.kind for tolerance in rotation] == ['orientation']
-    alignment = campaign.unseen_tolerances(load_task(ROOT / 'config' / 'reproduce' /
-                                                     'task5.yaml'))
+    alignment = unseen.unseen_tolerances(load_task(ROOT / 'config' / 'reproduce' /
+                                                   'task5.yaml'))
     kinds = [tolerance.kind for tolerance in alignment]
     # and both together, a pose error (Task 4's success: the box turned and kept in place)
     assert kinds == ['plane', 'position', 'x', 'y', 'orientation', 'pose']
@@ -409,7 +409,7 @@ def test_analyze_reports_only_the_errors_of_the_tasks_goals():
 
 def test_bands_are_scored_on_the_error_the_tasks_goal_measures():
     def scored(folder, name):
-        return campaign.scored_tolerance(load_task(ROOT / 'config' / folder / name)).kind
+        return unseen.scored_tolerance(load_task(ROOT / 'config' / folder / name)).kind
     assert scored('tasks', 'task5.yaml') == 'plane'  # the paper's task: the plane of the table
     assert scored('tasks', 'task5_along_x.yaml') == 'x'  # the named variant: x alone
     assert scored('reproduce', 'task5.yaml') == 'plane'
@@ -444,11 +444,11 @@ def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsy
     # where in each randomized range the design fails: bands of the error the task scores
     bands = values['bands']
     scored = Tolerance(**bands['tolerance'])
-    assert scored == campaign.scored_tolerance(task)
+    assert scored == unseen.scored_tolerance(task)
     within = measured.errors[scored.kind] < scored.limit
     scales = np.array([world.scale for world in unseen_world_states(task, 20)])
     lower, upper = task.randomization.scale.lower, task.randomization.scale.upper
-    edges = np.linspace(lower, upper, campaign.BANDS + 1)
+    edges = np.linspace(lower, upper, unseen.BANDS + 1)
     for (low, high, count, share), band_low, band_high in zip(
             bands['quantities']['scale'], edges, edges[1:]):
         inside = (scales >= band_low) & (scales <= band_high)
@@ -477,11 +477,11 @@ def test_every_preset_and_table_named_in_results_exists_and_checks():
 
 
 def test_seeds_are_a_count_a_range_or_a_list(capsys):
-    assert experiments.parse_seeds('3') == (1, 2, 3)  # the tuning seeds
-    assert experiments.parse_seeds('101-105') == (101, 102, 103, 104, 105)  # fresh seeds
-    assert experiments.parse_seeds('4,7,4') == (4, 7)
-    assert experiments.seeds_text((101, 102, 103)) == 'seeds 101 to 103'
-    assert experiments.seeds_text((4, 7)) == 'seeds 4, 7'
+    assert catalog.parse_seeds('3') == (1, 2, 3)  # the tuning seeds
+    assert catalog.parse_seeds('101-105') == (101, 102, 103, 104, 105)  # fresh seeds
+    assert catalog.parse_seeds('4,7,4') == (4, 7)
+    assert catalog.seeds_text((101, 102, 103)) == 'seeds 101 to 103'
+    assert catalog.seeds_text((4, 7)) == 'seeds 4, 7'
     for bad in ('0', '5-x', '', '3-1'):
         assert cli.main(['reproduce', 'levers-task6', '--seeds', bad]) == 2
         error = capsys.readouterr().err.strip()

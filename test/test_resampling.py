@@ -16,11 +16,11 @@ from hand_codesign.analysis.records import recorded_design
 from hand_codesign.analysis.resume import resume_point
 from hand_codesign.cli import main
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.optimizers import replay
-from hand_codesign.core.resume import rebuild_search
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.search import Search
-from hand_codesign.core.worlds import world_states
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.search.optimizers import replay
+from hand_codesign.core.search.resume import rebuild_search
+from hand_codesign.core.search.search import Search
+from hand_codesign.core.sim.worlds import world_states
 from hand_codesign.errors import UserError
 import numpy as np
 import pytest
@@ -55,7 +55,7 @@ def run_to_end(search, evaluate_batch=synthetic):
     recorded, genomes, batches = {}, {}, []
     while not search.stop():
         batch = search.ask()
-        assert all(c.world_draw == search.batch_task.world_draw for c in batch)
+        assert all(c.variant.world_draw == search.batch_task.world_draw for c in batch)
         results = evaluate_batch(batch, search.batch_task)
         recorded.update(results)
         genomes.update({c.candidate_id: c.x.copy() for c in batch})
@@ -69,12 +69,12 @@ def test_each_generation_meets_its_own_draw_and_the_final_check_the_fixed_worlds
     search = Search(task)
     recorded, _, batches = run_to_end(search)
     generations = [batch for batch, checking in batches if not checking]
-    assert [batch[0].world_draw for batch in generations] == [1, 2, 3, 4]
+    assert [batch[0].variant.world_draw for batch in generations] == [1, 2, 3, 4]
     assert [[c.generation for c in batch] for batch in generations] == [[g] * 5 for g in range(4)]
     (check, checking), = [entry for entry in batches if entry[1]]
     # the best candidate (on its own draw) of each of the last two generations, again
     bests = [min(batch, key=lambda c: recorded[c.candidate_id][0]) for batch in generations]
-    assert [c.world_draw for c in check] == [0, 0] and checking
+    assert [c.variant.world_draw for c in check] == [0, 0] and checking
     assert [c.candidate_id for c in check] == [20, 21]
     for repeated, best in zip(check, bests[-2:]):
         assert np.array_equal(repeated.x, best.x)

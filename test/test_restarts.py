@@ -10,12 +10,13 @@ import sys
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.cli import main
 from hand_codesign.core import load_task
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.optimizers import (AskTellOptimizer, Candidate, make_optimizer,
-                                           OptimizerError, replay, ReplayError)
-from hand_codesign.core.restarts import BipopCmaEs, IpopCmaEs
-from hand_codesign.core.resume import rebuild_search
-from hand_codesign.core.search import Search
+from hand_codesign.core.search.factory import make_optimizer
+from hand_codesign.core.search.optimizers import (AskTellOptimizer, Candidate, OptimizerError,
+                                                  replay, ReplayError)
+from hand_codesign.core.search.restarts import BipopCmaEs, IpopCmaEs
+from hand_codesign.core.search.resume import rebuild_search
+from hand_codesign.core.search.search import Search
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 import pytest
 from task_files import optimizer_document, write_task as write_task_file
@@ -144,7 +145,7 @@ import pickle, sys
 sys.path.insert(0, {test_dir!r})
 from test_restarts import rugged
 from test_optimizers import run
-from hand_codesign.core.optimizers import AskTellOptimizer
+from hand_codesign.core.search.optimizers import AskTellOptimizer
 optimizer = AskTellOptimizer.from_state(open({state!r}, 'rb').read())
 rows = [(c.candidate_id, c.generation, c.x) for c in run(optimizer, rugged)]
 pickle.dump(rows, open({out!r}, 'wb'))

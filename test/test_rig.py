@@ -3,8 +3,8 @@ Hardware in the loop without ROS: physical designs, the simulated rig and the tr
 
 A candidate's physical fields rebuild its Design bit for bit; a rig that measures every
 physics step scores exactly what `evaluate` computes; sampled at 100 Hz off the checks, within
-the interpolation tolerance that core.rig derives; timeouts, failures and lost tracking reject
-a candidate with the reason, and a start collision charges the collision penalty.
+the interpolation tolerance that core.rig.trials derives; timeouts, failures and lost tracking
+reject a candidate with the reason, and a start collision charges the collision penalty.
 """
 
 import dataclasses
@@ -12,11 +12,10 @@ import pathlib
 import xml.etree.ElementTree as ElementTree
 
 from hand_codesign.core import evaluate, genome_spec, load_task
-from hand_codesign.core.objectives import COLLISION_PENALTY
-from hand_codesign.core.physical import candidate_design, design_from_physical
-from hand_codesign.core.rig import (interpolation_tolerance, pose_at, RigTrials,
-                                    TrackingLost)
-from hand_codesign.core.sim_rig import SampleClock, SimulatedRig
+from hand_codesign.core.rig.simulated import SampleClock, SimulatedRig
+from hand_codesign.core.rig.trials import interpolation_tolerance, pose_at, RigTrials, TrackingLost
+from hand_codesign.core.sim.objectives import COLLISION_PENALTY
+from hand_codesign.core.sim.physical import candidate_design, design_from_physical
 import numpy as np
 import pytest
 

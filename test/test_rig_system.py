@@ -6,7 +6,7 @@ evaluator: the rig publishes every physics step and every objective is the one `
 computes, exactly. Then `hand-codesign evaluate BAG --rig sim` at 100 Hz, the samples halfway
 between the checks' physics steps: prediction and measurement of the best designs sit side by
 side in the new bag, within the interpolation tolerance derived from the recorded traces
-(core.rig), and `analyze` reports the gap.
+(core.rig.trials), and `analyze` reports the gap.
 """
 
 import pathlib
@@ -18,8 +18,8 @@ from hand_codesign.analysis.records import design_task, recorded_design, run_tas
 from hand_codesign.analysis.rig_report import rig_comparison
 from hand_codesign.analysis.rig_traces import trial_traces
 from hand_codesign.core import evaluate
-from hand_codesign.core.objectives import goal_schedule
-from hand_codesign.core.rig import interpolation_tolerance
+from hand_codesign.core.rig.trials import interpolation_tolerance
+from hand_codesign.core.sim.objectives import goal_schedule
 import numpy as np
 import pytest
 

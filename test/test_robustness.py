@@ -5,10 +5,10 @@ import pathlib
 
 from hand_codesign.core import grid_world_states, load_task, world_states, WorldState
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.objectives import orientation_angle, position_distance
-from hand_codesign.core.robustness import evaluate_robustness
-from hand_codesign.core.worlds import object_state
+from hand_codesign.core.experiments.robustness import evaluate_robustness
+from hand_codesign.core.sim.objectives import orientation_angle, position_distance
+from hand_codesign.core.sim.worlds import object_state
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 import pytest
 

@@ -12,8 +12,9 @@ from hand_codesign.analysis.records import structure_bests
 from hand_codesign.analysis.robustness_report import robustness_worlds
 from hand_codesign.cli import main
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.runs import run_task
-from hand_codesign.core.worlds import grid_world_states
+from hand_codesign.core.run.runs import run_task
+from hand_codesign.core.sim.worlds import grid_world_states
+from hand_codesign.core.task.variant import Variant
 import numpy as np
 
 
@@ -97,7 +98,7 @@ def test_fig3_per_structure_of_a_hierarchy_run(tmp_path, capsys):
         assert len(worlds) == 64
         # the structure's best design, evaluated alone on a grid world, ends as reported
         design = recorded_design(record, candidate_id)
-        task = run_task_of(record, structure)
+        task = run_task_of(record, Variant(structure=tuple(structure)))
         alone = evaluate(design.x, task, worlds=[grid_world_states(task, 2)[9]])
         assert float(worlds[9]['final_position_error']) == alone.final_errors[0, 0]
         median = next(row for row in rows if row['structure'] == ' '.join(map(str, structure))

@@ -3,11 +3,12 @@
 import pathlib
 import re
 
-from hand_codesign.core.runs import library_versions
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.runs import run_task
+from hand_codesign.core.run.runs import library_versions
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.run.runs import run_task
 from hand_codesign.core.task import load_task
 from hand_codesign.core.task import TaskError
+from hand_codesign.core.task.variant import Variant
 import pytest
 
 TASK = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'tasks' / 'task5.yaml'
@@ -32,7 +33,7 @@ def test_a_run_task_rebuilt_from_its_recorded_text_is_the_same_task():
 
 
 def test_a_structure_override_gives_that_hand():
-    rebuilt = run_task(TASK.read_text(), 'run x task', 1, 0, 0, 0, structure=[1, 2])
+    rebuilt = run_task(TASK.read_text(), 'run x task', 1, 0, 0, 0, Variant(structure=(1, 2)))
     assert rebuilt.structure == (1, 2)
 
 

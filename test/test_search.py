@@ -2,10 +2,10 @@
 
 import pathlib
 
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.objectives import weighted_fitness
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.search import Search
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.search.search import Search
+from hand_codesign.core.sim.objectives import weighted_fitness
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 
 TASKS = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'tasks'
@@ -20,7 +20,7 @@ def test_ask_repeats_the_batch_until_it_is_told():
     search = Search(task)
     first = search.ask()
     assert [c.candidate_id for c in search.ask()] == [c.candidate_id for c in first]
-    assert all(c.structure == task.structure for c in first)
+    assert all(c.variant.structure == task.structure for c in first)
     assert all(c.x.shape == (genome_spec(task).size,) for c in first)
     search.tell(objectives(first, len(task.objective_names)))
     second = search.ask()
@@ -60,8 +60,8 @@ def test_a_hierarchy_checks_each_structure_on_its_evaluation_worlds():
     seen = []
     while not search.stop():
         batch = search.ask()
-        seen.append((search.checking, batch[0].structure, search.batch_task.num_world_states,
-                     batch[0].held_out))
+        seen.append((search.checking, batch[0].variant.structure,
+                     search.batch_task.num_world_states, batch[0].variant.held_out))
         size = len(task.objective_names)
         search.tell(objectives(batch, size))
     # the structure is optimized twice, then its best design is checked on held-out worlds

@@ -7,13 +7,13 @@ import re
 import struct
 
 from hand_codesign.core import contract
-from hand_codesign.core.evaluation_jobs import EvaluatorInbox
-from hand_codesign.core.signing import Credential
-from hand_codesign.core.signing import RunKeys
-from hand_codesign.core.signing import SIGNED_FIELDS
-from hand_codesign.core.signing import SigningError
-from hand_codesign.core.signing import summary_valid
-from hand_codesign.core.signing import UNSIGNED_FIELDS
+from hand_codesign.core.run.evaluation_jobs import EvaluatorInbox
+from hand_codesign.core.run.signing import Credential
+from hand_codesign.core.run.signing import RunKeys
+from hand_codesign.core.run.signing import SIGNED_FIELDS
+from hand_codesign.core.run.signing import SigningError
+from hand_codesign.core.run.signing import summary_valid
+from hand_codesign.core.run.signing import UNSIGNED_FIELDS
 from hand_codesign.ros.keys import evaluator_credential
 from hand_codesign.ros.keys import OptimizerSigner
 from hand_codesign.ros.keys import sign_evaluation

@@ -10,13 +10,13 @@ from hand_codesign.analysis.records import design_task
 from hand_codesign.analysis.records import recorded_design
 from hand_codesign.cli import main
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.evaluation_jobs import candidate_task
-from hand_codesign.core.optimizers import replay
-from hand_codesign.core.resume import rebuild_search
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.search import Search
+from hand_codesign.core.run.evaluation_jobs import candidate_task
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.search.optimizers import replay
+from hand_codesign.core.search.resume import rebuild_search
+from hand_codesign.core.search.search import Search
+from hand_codesign.core.sim.worlds import world_states, WorldState
 from hand_codesign.core.task import TaskError
-from hand_codesign.core.worlds import world_states, WorldState
 import numpy as np
 import pytest
 
@@ -30,7 +30,7 @@ def two_stage(name, seed=5, iterations=2, population=4, worlds=3):
 
 def synthetic(candidates, size):
     """Objectives that depend on the genome and the stage, without simulating."""
-    return {c.candidate_id: np.full(size, float(np.sum((c.x - 0.3) ** 2)) + c.stage)
+    return {c.candidate_id: np.full(size, float(np.sum((c.x - 0.3) ** 2)) + c.variant.stage)
             for c in candidates}
 
 
@@ -51,7 +51,7 @@ def test_stage_one_uses_the_nominal_world_and_stage_two_starts_from_its_result()
     task = two_stage('task1.yaml')
     size = len(task.objective_names)
     search, _, _, batches = run_to_end(task, lambda _, batch: synthetic(batch, size))
-    stages = [batch[0].stage for batch in batches]
+    stages = [batch[0].variant.stage for batch in batches]
     assert stages == [1] * task.iterations + [2] * task.iterations
     assert [c.candidate_id for batch in batches for c in batch] == list(
         range(2 * task.iterations * task.population))
@@ -108,8 +108,8 @@ def test_real_evaluations_of_each_stage_are_what_an_evaluator_computes():
     for batch in batches:
         candidate = batch[0]
         message = types.SimpleNamespace(
-            run_id='r', structure=[], world_states=0, horizon=candidate.horizon,
-            stage=candidate.stage, held_out_worlds=False)
+            run_id='r', structure=[], world_states=0, horizon=candidate.variant.horizon,
+            stage=candidate.variant.stage, held_out_worlds=False)
         rebuilt, _ = candidate_task(run, message)
         assert np.array_equal(evaluate(candidate.x, rebuilt).objectives,
                               recorded[candidate.candidate_id].objectives)

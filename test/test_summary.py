@@ -1,8 +1,8 @@
 """The per-generation statistics the optimizer publishes and the terminal line it prints."""
 
-from hand_codesign.core.optimizers import OptimizerResult
-from hand_codesign.core.summary import generation_summary
-from hand_codesign.core.summary import progress_line
+from hand_codesign.core.run.summary import generation_summary
+from hand_codesign.core.run.summary import progress_line
+from hand_codesign.core.search.optimizers import OptimizerResult
 import numpy as np
 
 NAMES = ('position_1', 'orientation_1')

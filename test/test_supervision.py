@@ -1,14 +1,14 @@
 """
-The supervision of a run's processes (core.supervision) driven by a fake clock, without ROS.
+The supervision of a run's processes (core.run.supervision) driven by a fake clock, without ROS.
 
 What a user relies on: an evaluator or recorder that dies is started again soon, under a new
 evaluator id; one that keeps dying ends the run with a sentence naming it; a run whose
 evaluators never join ends after the start deadline, and only then.
 """
 
-from hand_codesign.core.supervision import node_name
-from hand_codesign.core.supervision import RECORDER
-from hand_codesign.core.supervision import Supervisor
+from hand_codesign.core.run.supervision import node_name
+from hand_codesign.core.run.supervision import RECORDER
+from hand_codesign.core.run.supervision import Supervisor
 
 
 class Clock:

@@ -21,8 +21,8 @@ import time
 
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.trust import trust_counts
-from hand_codesign.core.signing import new_secret
-from hand_codesign.core.signing import RunKeys
+from hand_codesign.core.run.signing import new_secret
+from hand_codesign.core.run.signing import RunKeys
 from hand_codesign.ros.runner import claimed_domain
 from intruder import FORGED_SUMMARIES
 import numpy as np

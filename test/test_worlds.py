@@ -4,10 +4,10 @@ import math
 import pathlib
 
 from hand_codesign.core import grid_world_states, load_task, world_states, WorldState
-from hand_codesign.core.measures import unseen_world_states
-from hand_codesign.core.objectives import orientation_angle
+from hand_codesign.core.experiments.measures import unseen_world_states
+from hand_codesign.core.sim.objectives import orientation_angle
+from hand_codesign.core.sim.worlds import object_state, randomized_quantities
 from hand_codesign.core.task import resting_height
-from hand_codesign.core.worlds import object_state, randomized_quantities
 import numpy as np
 import pytest
 

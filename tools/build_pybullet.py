@@ -2,8 +2,8 @@
 Build PyBullet from its pinned source with profile-guided optimization; install it in .venv.
 
 Why: 70 % of a rollout's time is Bullet's multibody constraint solver and 14 % its collision
-detection (core/sim.py). The PyPI wheel is compiled once for every machine; compiled here
-again, instrumented, run on a co-design workload and compiled once more with that profile
+detection (core/sim/pybullet_sim.py). The PyPI wheel is compiled once for every machine; compiled
+here again, instrumented, run on a co-design workload and compiled once more with that profile
 (GCC's -fprofile-generate / -fprofile-use), the same source steps 1.1 to 1.25 times as fast
 on Task 5's scene (the ratio varies from run to run on a shared machine). The objectives stay
 bit-identical: profile-guided optimization lays out and inlines code by measured branch

@@ -7,7 +7,7 @@ Physics steps per second of a reproduce campaign's runs, and the time another bu
 Reads each finished run's bag (its optimizer's wall time and the steps its evaluations
 simulated), prints per configuration the physics steps per wall second measured here, and
 estimates the campaign at `--budget` from those rates and the steps that budget allows
-(core.preview.run_budget, full rollouts: pessimistic where early termination cuts them): on
+(core.run.preview.run_budget, full rollouts: pessimistic where early termination cuts them): on
 this machine, and on H hosts of C cores (the rate scaled by the cores, the runs' fixed costs
 left out: an estimate, not a measurement). A smoke campaign's small batches spend a larger
 share of their time on start-up and dispatch than long runs do, so its rates make the
@@ -18,9 +18,9 @@ import argparse
 import pathlib
 
 from hand_codesign.analysis import campaign, records
-from hand_codesign.core.experiments import EXPERIMENTS, run_key, training_worlds
-from hand_codesign.core.preview import run_budget
-from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.experiments.catalog import EXPERIMENTS, run_key, training_worlds
+from hand_codesign.core.run.preview import run_budget
+from hand_codesign.core.run.runs import load_run_task
 import numpy as np
 
 

@@ -3,7 +3,8 @@ Where a run's best design leaves the object on the plane, against where the worl
 
     python tools/final_offsets.py BAG [BAG ...] [--unseen 1000]
 
-Each bag's best design is simulated on N unseen worlds (core.measures, as `reproduce` and
+Each bag's best design is simulated on N unseen worlds (core.experiments.measures, as `reproduce`
+and
 `analyze --unseen` measure it). Per axis of the plane, x and y of the world, it prints the
 share of worlds whose final offset from the last position goal is below 5 mm, and the
 least-squares slope and the correlation of the object's final position on the world's start
@@ -15,7 +16,7 @@ removes, since the hand cannot tell where the world put it.
 import argparse
 
 from hand_codesign.analysis.campaign import final_design
-from hand_codesign.core.measures import measure_worlds, unseen_world_states
+from hand_codesign.core.experiments.measures import measure_worlds, unseen_world_states
 import numpy as np
 
 TOLERANCE = 0.005  # m

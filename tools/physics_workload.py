@@ -14,8 +14,8 @@ Usage: python tools/physics_workload.py    (about 30 s when instrumented)
 import pathlib
 
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.genome import genome_spec
 from hand_codesign.core.task import load_task
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 
 TASKS = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'tasks'

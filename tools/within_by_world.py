@@ -5,20 +5,20 @@ Which unseen worlds a campaign's designs fail on: the share within per band of o
         [--quantity scale] [--bands 0.5 0.75 1 1.25 1.5 2] [--seeds 5 | 101-105]
 
 Reads the campaign's cached measures (no simulation): each run's final errors on its unseen
-worlds, which `core.measures.unseen_world_states` draws again from the run's seed and the
-task's ranges. Per configuration, the unseen worlds of its seeds are pooled and split by the
-quantity (core.worlds.QUANTITIES: position_x, position_y, orientation, friction, scale,
+worlds, which `core.experiments.measures.unseen_world_states` draws again from the run's seed and
+the task's ranges. Per configuration, the unseen worlds of its seeds are pooled and split by the
+quantity (core.sim.worlds.QUANTITIES: position_x, position_y, orientation, friction, scale,
 mass) into the bands given; each band gets its worlds and its share within the tolerance.
 """
 
 import argparse
 
 from hand_codesign.analysis.campaign import load_measures
-from hand_codesign.core.experiments import EXPERIMENTS, parse_seeds
-from hand_codesign.core.measures import shares_in_bands, unseen_world_states
-from hand_codesign.core.robustness import world_values
+from hand_codesign.core.experiments.catalog import EXPERIMENTS, parse_seeds
+from hand_codesign.core.experiments.measures import shares_in_bands, unseen_world_states
+from hand_codesign.core.experiments.robustness import world_values
+from hand_codesign.core.sim.worlds import QUANTITIES
 from hand_codesign.core.task import load_task
-from hand_codesign.core.worlds import QUANTITIES
 import numpy as np
 
 

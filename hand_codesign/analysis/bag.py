@@ -16,7 +16,7 @@ big-endian CDR), and gathered per topic into column tables of numpy arrays.
 
 GenerationSummaries are what a reader trusts most (resume rebuilds the search from them), so
 in a signed run each carries an Ed25519 signature under the key its run announced in its first
-RunInfo (core.signing; `_summary_keys`); a summary whose signature fails was forged on the
+RunInfo (core.run.signing; `_summary_keys`); a summary whose signature fails was forged on the
 run's domain, is left out, and counted in ``RunRecord.rejected_summaries`` with a warning.
 """
 
@@ -33,8 +33,8 @@ from hand_codesign.core.contract import GENERATION_SUMMARY_TYPE
 from hand_codesign.core.contract import LOOP_TYPES
 from hand_codesign.core.contract import MESSAGES_PACKAGE
 from hand_codesign.core.contract import RUN_INFO_TYPE
-from hand_codesign.core.runs import run_task
-from hand_codesign.core.signing import summary_valid
+from hand_codesign.core.run.runs import run_task
+from hand_codesign.core.run.signing import summary_valid
 from mcap.exceptions import EndOfFile
 from mcap.exceptions import McapError
 from mcap.records import Channel
@@ -89,21 +89,17 @@ class RunInfo:
     engine: str = ''    # physics engine ('' in a bag older than the field: the task file's)
     engine_version: str = ''
 
-    def task(self, structure=None, source='bag:run_info', world_states=None, horizon=None,
-             stage=0, held_out=False, world_draw=0):
+    def task(self, variant=None, source='bag:run_info'):
         """
         Return the Task the run used: its task text with the run's overrides applied.
 
-        `structure` and `world_states` (e.g. a hierarchy check's) replace the run's;
-        `horizon` is a candidate's sub-problem (Candidate.horizon); `stage` and `held_out` its
-        stage and world stream (Candidate.stage, Candidate.held_out_worlds), `world_draw` its
-        resampled worlds (Candidate.world_draw).
+        `variant` (core.task.variant.Variant, e.g. a candidate's: its structure, a hierarchy
+        check's worlds, its horizon, stage, held-out worlds or resampled draw) makes it the
+        version of the run's task that candidate was evaluated on.
         """
         return run_task(self.task_yaml, source=source, seed=self.seed,
                         iterations=self.iterations, population=self.population,
-                        world_states=world_states or self.world_states, structure=structure,
-                        horizon=horizon, stage=stage, held_out=held_out,
-                        world_draw=world_draw, engine=self.engine)
+                        world_states=self.world_states, variant=variant, engine=self.engine)
 
 
 class Table:

@@ -14,35 +14,31 @@ Layout of `--out DIR` for one experiment (`hand_codesign.commands.reproduce` wri
 Everything here is recomputed from the bags: delete `measures/` and the tables and run
 `reproduce` again, and the same numbers come back (the measures are deterministic).
 
-Measures (core.measures): each run's final design (the optimizer's choice, the final
+Measures (core.experiments.measures): each run's final design (the optimizer's choice, the final
 GenerationSummary's `best_x`) on the budget's unseen worlds of the run's seed. Per
 configuration over its seeds: the unseen worlds of all seeds pooled: the share within the
 tolerance, the median and 90th percentile of the error; **joint limits found**: the share of
-seeds whose design found them (core.measures: it ends within the tolerance resting on a limit
-it reached, touching the box, in at least half of its successes and a quarter of its worlds);
+seeds whose design found them (core.experiments.measures: it ends within the tolerance resting on a
+limit it reached, touching the box, in at least half of its successes and a quarter of its worlds);
 beside it, the mean share of the worlds that are such limit successes, and the looser
 earlier measure (resting on a limit while touching, whatever the outcome).
 """
 
-import dataclasses
 import json
 import pathlib
 
 from hand_codesign.analysis import records
-from hand_codesign.analysis.report import Generations, generations_from_summaries, write_csv
-from hand_codesign.core.experiments import (ALONG_X_5MM, ALONG_Y_5MM, ORIENTATION_01,
-                                            PLANE_5MM, POSE, POSITION_5MM, run_key,
-                                            seeds_text, training_worlds)
-from hand_codesign.core.measures import (DesignMeasures, measure_worlds, shares_in_bands,
-                                         summarize, unseen_world_states, with_pose_error,
-                                         WorldMeasures)
-from hand_codesign.core.robustness import world_values
-from hand_codesign.core.worlds import QUANTITIES
+from hand_codesign.analysis.generations import Generations, generations_from_summaries
+from hand_codesign.analysis.tables import write_csv
+from hand_codesign.core.experiments.catalog import run_key, seeds_text, training_worlds
+from hand_codesign.core.experiments.measures import (DesignMeasures, measure_worlds, summarize,
+                                                     unseen_world_states, with_pose_error,
+                                                     WorldMeasures)
+from hand_codesign.core.task.variant import Variant
 from hand_codesign.errors import UserError
 import numpy as np
 
 RESUME_MARK = '.resume'
-BANDS = 3  # bands of each randomized quantity's range in `analyze --unseen`
 
 
 def attempts(runs_dir, key):
@@ -80,7 +76,7 @@ def final_design(bag):
     else:
         design = records.recorded_design(record, records.best_candidate_id(record))
         structure, x = design.structure, design.x
-    return records.run_task_of(record, structure or None), x, structure
+    return records.run_task_of(record, Variant(structure=tuple(structure or ()))), x, structure
 
 
 def structure_bests(bags):
@@ -144,7 +140,7 @@ def measure_structures(bags, tolerance, unseen_worlds, processes=1):
     for structure, (_, candidate_id, bag) in sorted(structure_bests(bags).items()):
         record = records.open_run(bag, warn=False)
         design = records.recorded_design(record, candidate_id)
-        task = records.run_task_of(record, structure)
+        task = records.run_task_of(record, Variant(structure=tuple(structure)))
         measures = measure_worlds(design.x, task, unseen_world_states(task, unseen_worlds),
                                   processes)
         measured[structure_text(structure)] = {
@@ -554,108 +550,3 @@ def write_results(out, experiment, budget, seeds, figure_format='png'):
         paths.append(figure)
     paths[1].write_text('\n'.join(lines), encoding='utf-8')
     return paths
-
-
-def unseen_tolerances(task):
-    """
-    Return the Tolerances that `analyze --unseen` reports for a task, those of reproduce.
-
-    Only the errors of the goals the task has: without a position goal the box's distance
-    from its start would read as an error ("final position irrelevant", Task 6).
-    """
-    position = (PLANE_5MM, POSITION_5MM, ALONG_X_5MM, ALONG_Y_5MM) if task.goals.position else ()
-    orientation = (ORIENTATION_01,) if task.goals.orientation else ()
-    pose = (POSE,) if position and orientation else ()
-    return position + orientation + pose
-
-
-def scored_tolerance(task):
-    """
-    Return the Tolerance of the error the task's goals score, for its bands by world.
-
-    The last position goal's: along x or y when it measures one axis of the plane (the Task
-    5 presets), else in the plane; without a position goal the orientation's.
-    """
-    if not task.goals.position:
-        return ORIENTATION_01
-    axes = set(task.goals.position[-1].axes) - {'z'}
-    return {frozenset('x'): ALONG_X_5MM, frozenset('y'): ALONG_Y_5MM}.get(frozenset(axes),
-                                                                          PLANE_5MM)
-
-
-def world_bands(task, worlds, measures, tolerance, bands=BANDS):
-    """
-    Return {quantity: [(low, high, worlds, share within)]} over each randomized quantity.
-
-    The range of each quantity the task randomizes is cut into `bands` of equal width: the
-    shares tell where in that range the design fails (Task 6: the smallest boxes).
-    """
-    within = measures.errors[tolerance.kind] < tolerance.limit
-    values = np.array([world_values(world) for world in worlds]).reshape(len(worlds), -1)
-    return {name: shares_in_bands(values[:, QUANTITIES.index(name)], within,
-                                  np.linspace(bounds.lower, bounds.upper, bands + 1))
-            for name, bounds in task.randomization.quantities() if bounds.width > 0}
-
-
-def band_lines(bands, tolerance):
-    """Return the Markdown table of world_bands' shares, a row per quantity."""
-    count = max((len(row) for row in bands.values()), default=0)
-    lines = [f'Share of the worlds with {tolerance.describe()}, by where each randomized '
-             f'quantity fell in its range ({count} bands of equal width, SI units; worlds in '
-             'brackets):', '',
-             '| quantity | ' + ' | '.join(f'band {index + 1}' for index in range(count)) + ' |',
-             '|---|' + '---|' * count]
-    for name, row in bands.items():
-        lines.append(f'| {name} | ' + ' | '.join(
-            f'[{low:.3g}, {high:.3g}]: {percent(share) if worlds else "-"} ({worlds})'
-            for low, high, worlds, share in row) + ' |')
-    return lines
-
-
-def unseen_report(bag, count, processes=1, engine=None):
-    """
-    Return (Markdown lines, JSON record) of a run's best design on `count` unseen worlds.
-
-    `engine` ('pybullet' or 'mujoco') measures it in that physics engine instead of the run's
-    (a design's transfer to the other engine).
-
-    The same measures as a reproduce campaign's: for each error of the task's goals
-    (unseen_tolerances) the share of worlds within 5 mm or 0.1 rad, its median and p90, and
-    whether the design found its joint limits (core.measures) on the error its goals score.
-    """
-    task, x, structure = final_design(bag)
-    found_in = task.physics.engine
-    if engine:
-        task = task.replace(physics=dataclasses.replace(task.physics, engine=engine))
-    worlds = unseen_world_states(task, count)
-    measures = measure_worlds(x, task, worlds, processes)
-    summaries = [summarize(measures, tolerance) for tolerance in unseen_tolerances(task)]
-    lines = [f'## On {count} unseen worlds', '',
-             f'The best design (structure {list(structure)}) on {count} worlds drawn from '
-             f'another stream of seed {task.seed} than the training worlds, simulated with '
-             f'{task.physics.engine} (the run used {found_in}).', '',
-             '| error | within | median | p90 | median at the start |', '|---|---|---|---|---|']
-    for summary in summaries:
-        tolerance = summary.tolerance
-        lines.append(f'| {tolerance.describe()} | {percent(summary.within)} | '
-                     f'{error_text(summary.median, tolerance)} | '
-                     f'{error_text(summary.p90, tolerance)} | '
-                     f'{error_text(summary.initial_median, tolerance)} |')
-    first = summaries[0]
-    scored = scored_tolerance(task)
-    judged = summarize(measures, scored)
-    lines += ['', f'Within {scored.describe()} while resting on a joint limit it reached, '
-                  f'touching the object: {percent(judged.limit_success_share)} of the worlds, '
-                  f'{percent(judged.limit_share_of_successes)} of those within; joint limits '
-                  f'found (at least half of those within and a quarter of all): '
-                  f'{"yes" if judged.joint_limits_found else "no"}. Resting on a joint limit '
-                  f'while touching, whatever the outcome: {percent(first.limit_contact_share)} '
-                  f'of the worlds. Start collisions: {percent(first.collision_share)} of the '
-                  'worlds. Every world runs the whole motion, with no early termination.', '']
-    bands = world_bands(task, worlds, measures, scored)
-    lines += band_lines(bands, scored)
-    record = {'bag': str(bag), 'seed': task.seed, 'unseen_worlds': count,
-              'engine': task.physics.engine, 'run_engine': found_in,
-              'summaries': [summary.as_dict() for summary in summaries],
-              'bands': {'tolerance': dataclasses.asdict(scored), 'quantities': bands}}
-    return lines, record

@@ -3,7 +3,7 @@ A still picture of a design on its task: the hand and the object at a rollout's 
 
 `analyze` puts one of the run's best design into report.md (`best_design.png`). One world is
 re-simulated (analysis.replay.rollout_poses, the rollout `replay --world W` shows) and its
-first and last frames are drawn side by side with matplotlib, from core.geometry's shapes, the
+first and last frames are drawn side by side with matplotlib, from core.sim.geometry's shapes, the
 very shapes of the `/best_design` markers and of `replay --mcap`: the palm box, each finger
 segment as a cylinder between two spheres, each joint axis as a red line, the object, and a
 translucent copy of it at each goal pose. Both panels share one view and one scale, so the
@@ -11,12 +11,12 @@ object's motion between them is what the design did.
 """
 
 from hand_codesign.analysis.replay import rollout_poses
-from hand_codesign.core.geometry import GOAL_COLOUR
-from hand_codesign.core.geometry import goal_poses
-from hand_codesign.core.geometry import hand_shapes
-from hand_codesign.core.geometry import object_shapes
 from hand_codesign.core.rotations import rotation_matrix
-from hand_codesign.core.worlds import object_state
+from hand_codesign.core.sim.geometry import GOAL_COLOUR
+from hand_codesign.core.sim.geometry import goal_poses
+from hand_codesign.core.sim.geometry import hand_shapes
+from hand_codesign.core.sim.geometry import object_shapes
+from hand_codesign.core.sim.worlds import object_state
 import numpy as np
 
 RESOLUTION = 16     # points around a sphere's or cylinder's surface
@@ -72,7 +72,7 @@ def write_design_picture(path, task, design, world, pyplot):
     """
     Draw a RecordedDesign at the start and the end of its rollout in `world`; return path.
 
-    task: the Task it was evaluated with (records.design_task); world: a core.worlds
+    task: the Task it was evaluated with (records.design_task); world: a core.sim.worlds
     WorldState; pyplot: matplotlib.pyplot with a non-interactive backend.
     """
     model, palm, frames = rollout_poses(task, design, world)

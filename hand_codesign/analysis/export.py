@@ -8,12 +8,12 @@ earlier generation.
 DIR receives:
 
 - `hand.urdf`: the hand (palm and capsule segments, joint origins, axes and limits, link
-  friction), written by `core.hand.hand_urdf` from the same link table the simulator builds.
+  friction), written by `core.sim.hand.hand_urdf` from the same link table the simulator builds.
   Standard URDF has no capsule (PyBullet reads one, yourdfpy and urdfdom do not), so each
   capsule is written as what it is, a cylinder and a sphere at each end; the file loads in
   PyBullet, yourdfpy and other URDF tools (in PyBullet pass URDF_USE_IMPLICIT_CYLINDER, or it
   turns cylinders into meshes). URDF has no initial joint angles: they are in the YAML.
-- `hand.xml`: the same hand on the ground as MJCF, as core.mujoco_sim builds it for MuJoCo
+- `hand.xml`: the same hand on the ground as MJCF, as core.sim.mujoco_sim builds it for MuJoCo
   (capsules, limits, contact settings); its keyframe `initial` holds the initial angles.
 - `controller.yaml`: everything to rebuild and re-simulate the design without the bag:
   `controller` (the policy as a person reads it: kind, timing, values per joint name,
@@ -33,12 +33,13 @@ import pathlib
 from hand_codesign.analysis import records
 from hand_codesign.core.design import Design
 from hand_codesign.core.evaluate import evaluate_design
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.hand import hand_model
-from hand_codesign.core.hand import hand_urdf
-from hand_codesign.core.runs import run_task
+from hand_codesign.core.run.runs import run_task
+from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.hand import hand_urdf
 from hand_codesign.core.task import parse_design
 from hand_codesign.core.task import TaskError
+from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.variant import Variant
 from hand_codesign.errors import UserError
 from hand_codesign.outputs import staged
 import numpy as np
@@ -193,7 +194,7 @@ def export_design(record, recorded, out):
         name = f'{task.name}_candidate{recorded.candidate_id}'
         urdf_path.write_text(hand_urdf(design.hand, task.hand, name=name, capsules=False),
                              encoding='utf-8')
-        from hand_codesign.core.mujoco_sim import model_mjcf  # see core.evaluate.new_simulator
+        from hand_codesign.core.sim.mujoco_sim import model_mjcf  # see core.evaluate.new_simulator
         (out / MJCF_NAME).write_text(model_mjcf(
             model, task.time_step, task.hand.base_position, task.hand.base_orientation,
             task.policy.gravity_compensation, name), encoding='utf-8')
@@ -272,7 +273,7 @@ def load_export(folder):
                         int(task_document.get('iterations') or 0),
                         int(task_document.get('population') or 0),
                         int(task_document.get('world_states') or 0),
-                        task_document.get('structure'),
+                        Variant(structure=tuple(task_document.get('structure') or ())),
                         engine=str(task_document.get('engine') or ''))
     except (TaskError, ValueError, TypeError) as error:
         raise UserError(f'{path}: task: cannot rebuild the task: {error}') from None

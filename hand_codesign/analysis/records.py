@@ -5,8 +5,8 @@ What the analysis verbs need from a run's bag: its task, its evaluations and its
 and printing the reader's warnings (a truncated bag is read up to the cut). The other functions
 work on the RunRecord it returns:
 
-- `run_task_of(record, structure, world_states)`: the Task of the run (as every process of the
-  run rebuilt it, `core.runs.run_task`), for one structure of a hierarchy if asked;
+- `run_task_of(record, variant)`: the Task of the run (as every process of the run rebuilt it,
+  `core.run.runs.run_task`), or the version of it a candidate's Variant says, if asked;
 - `evaluation_rows(record)`: every Evaluation joined with its Candidate (genome, structure),
   with a status of 'ok', 'rejected', 'duplicate' (a later answer for an already evaluated
   candidate, which the optimizer ignored, or an audit's) or 'untold' (an answer that differs
@@ -29,13 +29,14 @@ from hand_codesign.analysis.bag import BagError
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.core.contract import STATUS_NAMES
 from hand_codesign.core.contract import STATUS_OK
-from hand_codesign.core.optimizers import OptimizerError
-from hand_codesign.core.optimizers import replay
 from hand_codesign.core.outcomes import Answer
-from hand_codesign.core.search import Search
+from hand_codesign.core.search.optimizers import OptimizerError
+from hand_codesign.core.search.optimizers import replay
+from hand_codesign.core.search.search import Search
 from hand_codesign.core.task import TaskError
-from hand_codesign.core.task_spec import QD_ALGORITHMS
-from hand_codesign.core.task_spec import RESTART_ALGORITHMS
+from hand_codesign.core.task.parts import QD_ALGORITHMS
+from hand_codesign.core.task.parts import RESTART_ALGORITHMS
+from hand_codesign.core.task.variant import Variant
 from hand_codesign.errors import UserError
 import numpy as np
 
@@ -85,13 +86,11 @@ def require_run_info(record, purpose):
     return record.run_info
 
 
-def run_task_of(record, structure=None, world_states=None, horizon=None, stage=0,
-                held_out=False, world_draw=0):
-    """Return the Task of the run (for `structure`, `world_states`, ... when given)."""
+def run_task_of(record, variant=None):
+    """Return the Task of the run (the version `variant`, a core.task.variant.Variant, of it)."""
     info = require_run_info(record, 'rebuilding the task')
     try:
-        return info.task(structure, f'{record.path} (RunInfo.task_yaml)', world_states,
-                         horizon, stage, held_out, world_draw)
+        return info.task(variant, f'{record.path} (RunInfo.task_yaml)')
     except (TaskError, ValueError) as error:
         raise UserError(f'{record.path}: the task recorded in the bag cannot be rebuilt: '
                         f'{error}') from None
@@ -298,7 +297,7 @@ class RecordedDesign:
     generation: int
     structure: tuple
     world_states: int            # 0: the run's number of world states
-    horizon: float               # s, its sub-problem (core.horizon); 0: none (older bags too)
+    horizon: float               # s, its sub-problem (search.horizon); 0: none (older bags too)
     x: np.ndarray                # normalized genome, as sent to the evaluator
     genome_names: tuple
     objective_names: list
@@ -306,9 +305,16 @@ class RecordedDesign:
     fitness: float
     world_objectives: np.ndarray  # (worlds, objectives), or None
     evaluator_id: str
-    stage: int = 0               # of a two-stage task (core.stages); 0: one stage, older bags
+    stage: int = 0               # of a two-stage task (search.stages); 0: one stage, older bags
     held_out: bool = False       # evaluated on the held-out worlds (a hierarchy check)
     world_draw: int = 0          # its resampled worlds (Candidate.world_draw); 0: the fixed ones
+
+    @property
+    def variant(self):
+        """Return the Variant of the run's task it was evaluated on (its Candidate's fields)."""
+        return Variant(structure=tuple(self.structure), world_states=int(self.world_states),
+                       horizon=float(self.horizon), stage=int(self.stage),
+                       held_out=bool(self.held_out), world_draw=int(self.world_draw))
 
 
 def recorded_design(record, candidate_id):
@@ -356,9 +362,7 @@ def recorded_design(record, candidate_id):
 
 def design_task(record, design):
     """Return the Task with which a RecordedDesign was evaluated."""
-    return run_task_of(record, design.structure or None, design.world_states or None,
-                       design.horizon or None, design.stage, design.held_out,
-                       design.world_draw)
+    return run_task_of(record, design.variant)
 
 
 def last_summary(record):
@@ -420,7 +424,7 @@ def told_outcomes(record, rows=None):
 
     A candidate's answer taken is its 'ok' Evaluation (`evaluation_rows`); of the answers
     with the same objectives bit for bit, the outcomes most of them gave (the first on ties),
-    as core.audits takes an answer that two evaluators agree on. Empty for a bag recorded
+    as core.run.audits takes an answer that two evaluators agree on. Empty for a bag recorded
     before Evaluations had outcomes, or of a run without outcome descriptors.
     """
     evaluations = record.evaluations
@@ -460,8 +464,8 @@ def best_candidate_id(record):
     That is the optimizer's own choice in its last GenerationSummary (the lowest weighted sum
     for CMA-ES, the front's point closest to zero for MO-CMA-ES); for a hierarchy the best
     design of the structure the hierarchy chose, and for a run with resampled worlds the best
-    of its final check on the fixed worlds (core.resampling; the search replayed from the bag,
-    as the run's result, or its best so far when the run did not get there); without
+    of its final check on the fixed worlds (core.search.resampling; the search replayed from the
+    bag, as the run's result, or its best so far when the run did not get there); without
     summaries (a bag cut early) the OK evaluation of lowest fitness.
     """
     if record.run_info is not None:
@@ -542,7 +546,7 @@ def replayed_optimizer(record, algorithms, single=False):
 
 def restarts_of(record):
     """
-    Return the core.restarts Restart records of a run of ipop-cma or bipop-cma, else [].
+    Return the core.search.restarts Restart records of a run of ipop-cma or bipop-cma, else [].
 
     Replayed (replayed_optimizer): every CMA-ES instance, the generation it started at, its
     population, step size, regime and why the one before it ended. Only for a run of one
@@ -554,7 +558,7 @@ def restarts_of(record):
 
 def archive_of(record):
     """
-    Return the core.quality_diversity optimizer of a cma-mae or cma-me run, else None.
+    Return the core.search.quality_diversity optimizer of a cma-mae or cma-me run, else None.
 
     Replayed (replayed_optimizer): the descriptors are computed from the genomes (and the
     outcome descriptors read from the Evaluations), so the archive comes back exactly as the

@@ -24,13 +24,13 @@ from hand_codesign.analysis import records
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.evaluate import evaluate_design
 from hand_codesign.core.evaluate import new_simulator
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.geometry import link_frames
-from hand_codesign.core.hand import hand_model
-from hand_codesign.core.sim import object_shape
-from hand_codesign.core.sim import Simulator
-from hand_codesign.core.worlds import object_state
-from hand_codesign.core.worlds import world_states
+from hand_codesign.core.sim.geometry import link_frames
+from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.pybullet_sim import object_shape
+from hand_codesign.core.sim.pybullet_sim import Simulator
+from hand_codesign.core.sim.worlds import object_state
+from hand_codesign.core.sim.worlds import world_states
+from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.errors import UserError
 from hand_codesign.outputs import staged
 import numpy as np
@@ -262,7 +262,7 @@ def rollout_poses(task, design, world):
     Return (HandModel, palm pose, frames) of one world's rollout of a RecordedDesign.
 
     frames: [(time s, link frames, object pose)] at the animation's frame rate, poses as
-    (position, quaternion xyzw) in the world frame, link frames as core.hand's table places
+    (position, quaternion xyzw) in the world frame, link frames as core.sim.hand's table places
     them (at the joints). A design starting in collision is not simulated: one frame shows the
     start, the hand at its initial angles.
     """

@@ -31,11 +31,17 @@ It prints a summary table to the terminal.
 import pathlib
 
 from hand_codesign.analysis import records
+from hand_codesign.analysis.figures import load_pyplot, plot_archive, plot_convergence, plot_pareto
+from hand_codesign.analysis.generations import (generations_from_evaluations,
+                                                generations_from_summaries, pareto_fronts,
+                                                restart_facts, STAGE_WORLDS)
 from hand_codesign.analysis.rig_report import rig_comparison
+from hand_codesign.analysis.tables import (aligned_table, float_texts, int_texts, markdown_cell,
+                                           number_text, write_csv, write_evaluations_csv)
 from hand_codesign.analysis.trust import trust_facts
-from hand_codesign.core.genome import genome_spec
+from hand_codesign.core.sim.worlds import world_states
 from hand_codesign.core.task import TaskError
-from hand_codesign.core.worlds import world_states
+from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.errors import UserError
 from hand_codesign.outputs import staged
 from hand_codesign.version import version_text
@@ -67,7 +73,8 @@ def analyze_command(arguments):
 def write_unseen(bag, out, count, engine=None):
     """Measure the best design on `count` unseen worlds (in `engine`: default the run's)."""
     import json
-    from hand_codesign.analysis.campaign import unseen_report
+    # imported here: measuring simulates (PyBullet), the rest of the report does not
+    from hand_codesign.analysis.unseen import unseen_report
     if count < 1:
         raise UserError(f'--unseen: expected a positive number of worlds, got {count}')
     lines, values = unseen_report(bag, count, processes=2, engine=engine)
@@ -81,187 +88,6 @@ def write_unseen(bag, out, count, engine=None):
 def default_report_dir(bag_path):
     """Return `<bag>_report` next to the bag (a folder, or an .mcap file without suffix)."""
     return records.beside_bag(bag_path, '_report')
-
-
-def _number(value):
-    """Return the exact text of a float for CSV ('' for NaN)."""
-    return '' if value != value else repr(value)
-
-
-def _float_texts(column):
-    """Return the exact texts of a float column."""
-    return [_number(value) for value in np.asarray(column, dtype=float).tolist()]
-
-
-def _int_texts(column):
-    return [str(value) for value in np.asarray(column).tolist()]
-
-
-def _bool_texts(column):
-    return ['true' if value else 'false' for value in np.asarray(column, dtype=bool).tolist()]
-
-
-def _csv_text(value):
-    text = str(value)
-    if any(mark in text for mark in ',"\n\r'):
-        text = '"' + text.replace('"', '""') + '"'
-    return text
-
-
-def write_csv(path, header, columns):
-    """Write columns (lists of texts, equal lengths) under header as CSV."""
-    with open(path, 'w', encoding='utf-8', newline='') as stream:
-        stream.write(','.join(_csv_text(name) for name in header) + '\n')
-        stream.writelines(','.join(row) + '\n' for row in zip(*columns))
-
-
-def write_evaluations_csv(path, rows):
-    """Write EvaluationRows as the evaluations CSV."""
-    header = (['generation', 'candidate_id', 'evaluator', 'status']
-              + list(rows.objective_names)
-              + ['fitness', 'collision', 'unstable_worlds', 'simulated_time', 'wall_time',
-                 'reason'] + list(rows.gene_names))
-    columns = [_int_texts(rows.generation), _int_texts(rows.candidate_id),
-               [_csv_text(value) for value in rows.evaluator_id.tolist()],
-               list(rows.status)]
-    rejected = rows.status == 'rejected'
-    for index in range(len(rows.objective_names)):
-        columns.append(_float_texts(rows.objectives[:, index]))
-    fitness = np.where(rejected, np.nan, rows.fitness)
-    columns += [_float_texts(fitness), _bool_texts(rows.collision),
-                _int_texts(rows.unstable_worlds), _float_texts(rows.simulated_time),
-                _float_texts(rows.wall_time),
-                [_csv_text(value) for value in rows.reason.tolist()]]
-    for index in range(len(rows.gene_names)):
-        columns.append(_float_texts(rows.genes[:, index]))
-    write_csv(path, header, columns)
-
-
-class Generations:
-    """Per-generation statistics: structure, generation, best and median per objective."""
-
-    def __init__(self, structures, generations, best, median, best_fitness, evaluations,
-                 wall_time, source, rows=None):
-        self.structures = structures        # list of tuples
-        self.generations = generations      # np.ndarray of int
-        self.best = best                    # (rows, objectives)
-        self.median = median
-        self.best_fitness = best_fitness    # best so far (NaN when unknown)
-        self.evaluations = evaluations      # told so far (NaN when unknown)
-        self.wall_time = wall_time
-        self.source = source                # 'summaries' or 'evaluations'
-        self.rows = rows                    # the GenerationSummary rows, when from summaries
-        self.horizons = np.zeros(len(generations))  # s, of a staged search (0: none)
-        self.stages = np.zeros(len(generations), dtype=int)  # of a two-stage task (0: none)
-
-    def __len__(self):
-        return len(self.generations)
-
-
-def _structure_tuples(column, count):
-    if count == 0:
-        return []
-    return [tuple(int(joints) for joints in column[index]) for index in range(count)]
-
-
-STAGE_WORLDS = {1: 'the nominal world only', 2: 'the randomized worlds'}
-
-
-def generations_from_summaries(record, num_objectives):
-    """Return the Generations of the GenerationSummary messages (the final repeat dropped)."""
-    summaries = record.generation_summaries
-    structures = _structure_tuples(summaries['structure'], len(summaries))
-    generation = np.asarray(summaries['generation'], dtype=np.int64)
-    final = np.asarray(summaries['final'], dtype=bool)
-    # a hierarchy's check of a structure's best design is not a generation of the search
-    keep = (~np.asarray(summaries['check'], dtype=bool) if 'check' in summaries
-            else np.ones(len(summaries), dtype=bool))
-    previous = None
-    for index in np.flatnonzero(keep):
-        # the final summary repeats the last generation's statistics with final = true
-        if (final[index] and previous is not None and generation[index] == generation[previous]
-                and structures[index] == structures[previous]):
-            keep[index] = False
-        previous = index
-    rows = np.flatnonzero(keep)
-    best = records._row_matrix(summaries['best'], rows, num_objectives)
-    median = records._row_matrix(summaries['median'], rows, num_objectives)
-    generations = Generations(
-        [structures[row] for row in rows], generation[rows], best, median,
-        np.asarray(summaries['best_fitness'], dtype=float)[rows],
-        np.asarray(summaries['evaluations'], dtype=float)[rows],
-        np.asarray(summaries['wall_time'], dtype=float)[rows], 'summaries', rows)
-    if 'horizon' in summaries:  # older bags have no horizon
-        generations.horizons = np.asarray(summaries['horizon'], dtype=float)[rows]
-    generations.stages = _stages_of(record, summaries, rows)
-    return generations
-
-
-def _stages_of(record, summaries, rows):
-    """Return the stage of each summary row: that of its told candidates (0: one stage)."""
-    candidates = record.candidates
-    if not len(candidates) or 'stage' not in candidates or 'told_ids' not in summaries:
-        return np.zeros(len(rows), dtype=int)
-    stage_of = dict(zip(np.asarray(candidates['candidate_id']).tolist(),
-                        np.asarray(candidates['stage']).tolist()))
-    stages = []
-    for row in rows:
-        told = np.asarray(summaries['told_ids'][row]).ravel().tolist()
-        stages.append(int(stage_of.get(told[0], 0)) if told else 0)
-    return np.asarray(stages, dtype=int)
-
-
-def generations_from_evaluations(rows, weights):
-    """Return Generations computed from the OK evaluations (a bag without summaries)."""
-    ok = rows.ok
-    generations = np.unique(rows.generation[ok])
-    count = len(rows.objective_names)
-    best = np.full((len(generations), count), np.nan)
-    median = np.full((len(generations), count), np.nan)
-    best_fitness = np.full(len(generations), np.nan)
-    evaluations = np.full(len(generations), np.nan)
-    so_far, told = np.inf, 0
-    for index, generation in enumerate(generations):
-        mask = ok & (rows.generation == generation)
-        values = rows.objectives[mask]
-        best[index] = values.min(axis=0)
-        median[index] = np.median(values, axis=0)
-        fitness = values @ weights if weights is not None else rows.fitness[mask]
-        so_far = min(so_far, float(np.min(fitness)))
-        told += int(mask.sum())
-        best_fitness[index] = so_far
-        evaluations[index] = told
-    return Generations([()] * len(generations), generations, best, median, best_fitness,
-                       evaluations, np.full(len(generations), np.nan), 'evaluations')
-
-
-def restart_facts(restarts):
-    """Return [('restarts', text)] of a run's core.restarts Restart records, or [] for none."""
-    if not restarts:
-        return []
-    first = restarts[0]
-    parts = [f'{len(restarts) - 1}; generation 0: population {first.population}']
-    for restart in restarts[1:]:
-        regime = ', small regime' if restart.regime == 'small' else ''
-        parts.append(f'generation {restart.generation}: population {restart.population}, '
-                     f'step size {restart.sigma:.3g}{regime} (after {restart.reason})')
-    return [('restarts', '; '.join(parts))]
-
-
-def pareto_fronts(record, num_objectives, rows):
-    """Return [(order, generation, front (points, objectives))] of summary rows with a front."""
-    summaries = record.generation_summaries
-    fronts = []
-    if not len(summaries) or 'pareto_front' not in summaries or rows is None:
-        return fronts
-    sizes = np.asarray(summaries['pareto_size'], dtype=np.int64)
-    for order, index in enumerate(rows):
-        if sizes[index] <= 0:
-            continue
-        values = np.asarray(summaries['pareto_front'][index], dtype=float).ravel()
-        front = values[:sizes[index] * num_objectives].reshape(-1, num_objectives)
-        fronts.append((order, int(summaries['generation'][index]), front))
-    return fronts
 
 
 class Report:
@@ -416,9 +242,9 @@ class Report:
         elites = self.elites
         columns = [[str(e.candidate_id) for e in elites], [str(e.generation) for e in elites]]
         columns += [[str(e.cell[i]) for e in elites] for i in range(2)]
-        columns += [_float_texts(np.array([e.descriptors[i] for e in elites]))
+        columns += [float_texts(np.array([e.descriptors[i] for e in elites]))
                     for i in range(2)]
-        columns.append(_float_texts(np.array([e.fitness for e in elites])))
+        columns.append(float_texts(np.array([e.fitness for e in elites])))
         write_csv(path, header, columns)
 
     def archive_markdown(self):
@@ -438,7 +264,7 @@ class Report:
             return ''
         rows = self.elite_rows(ELITES_LISTED)
         return (f'archive: the {len(rows)} best of {len(self.elites)} elites\n'
-                + _aligned([self.elite_header()] + rows))
+                + aligned_table([self.elite_header()] + rows))
 
     def best_parameters(self):
         """Return [(gene, physical value, unit, lower, upper, normalized)] of the best design."""
@@ -484,7 +310,7 @@ class Report:
         if self.rig is not None:
             files.append(out / 'rig_gap.csv')
             self.rig.write_csv(files[-1])
-            files.append(self.rig.plot(out / 'rig_gap.png', _pyplot()))
+            files.append(self.rig.plot(out / 'rig_gap.png', load_pyplot()))
         files += self.write_picture(out / DESIGN_PICTURE)
         files.append(out / 'report.md')
         files[-1].write_text(self.markdown([figure.name for figure in figures]),
@@ -506,7 +332,7 @@ class Report:
         # imported here: the picture simulates (PyBullet), the rest of the report does not
         from hand_codesign.analysis.design_picture import write_design_picture
         self.picture = write_design_picture(path, task, self.best, world_states(task)[0],
-                                            _pyplot())
+                                            load_pyplot())
         return [self.picture]
 
     def write_generations_csv(self, path):
@@ -518,23 +344,23 @@ class Report:
                   + (['horizon'] if generations.horizons.any() else [])
                   + (['stage'] if generations.stages.any() else []))
         columns = [['x'.join(str(j) for j in structure) for structure in generations.structures],
-                   _int_texts(generations.generations)]
-        columns += [_float_texts(generations.best[:, i]) for i in range(len(self.names))]
-        columns += [_float_texts(generations.median[:, i]) for i in range(len(self.names))]
-        columns += [_float_texts(generations.best_fitness),
-                    [_number(value) if value != value else str(int(value))
+                   int_texts(generations.generations)]
+        columns += [float_texts(generations.best[:, i]) for i in range(len(self.names))]
+        columns += [float_texts(generations.median[:, i]) for i in range(len(self.names))]
+        columns += [float_texts(generations.best_fitness),
+                    [number_text(value) if value != value else str(int(value))
                      for value in generations.evaluations.tolist()],
-                    _float_texts(generations.wall_time)]
+                    float_texts(generations.wall_time)]
         if generations.horizons.any():
-            columns.append(_float_texts(generations.horizons))
+            columns.append(float_texts(generations.horizons))
         if generations.stages.any():
-            columns.append(_int_texts(generations.stages))
+            columns.append(int_texts(generations.stages))
         write_csv(path, header, columns)
 
     def write_front_csv(self, path):
         index, generation, front = self.fronts[-1]
         columns = [[str(generation)] * len(front)]
-        columns += [_float_texts(front[:, i]) for i in range(front.shape[1])]
+        columns += [float_texts(front[:, i]) for i in range(front.shape[1])]
         write_csv(path, ['generation'] + list(self.names), columns)
 
     # ---------------------------------------------------------------- text
@@ -542,11 +368,11 @@ class Report:
     def markdown(self, figure_names):
         """Return report.md."""
         lines = [f'# Run {self.record.run_id or "(unknown)"}', '', '| | |', '|---|---|']
-        lines += [f'| {label} | {_markdown_cell(text)} |' for label, text in self.facts()]
+        lines += [f'| {label} | {markdown_cell(text)} |' for label, text in self.facts()]
         lines.append(f'| report by | hand-codesign {version_text()} |')
         if self.record.warnings:
             lines += ['', '## Warnings from reading the bag', '']
-            lines += [f'- {_markdown_cell(warning)}' for warning in self.record.warnings]
+            lines += [f'- {markdown_cell(warning)}' for warning in self.record.warnings]
         lines += ['', '## Convergence', '']
         for name in figure_names:
             lines += [f'![{name}]({name})', '']
@@ -645,161 +471,4 @@ class Report:
                          + [f'{v:.4g}' for v in generations.median[index]]
                          + [f'{generations.best_fitness[index]:.4g}',
                             '' if evaluations != evaluations else str(int(evaluations))])
-        return _aligned(table)
-
-
-def _aligned(table):
-    """Return rows of text cells as lines, each column right-aligned to its widest cell."""
-    widths = [max(len(row[column]) for row in table) for column in range(len(table[0]))]
-    return '\n'.join('  '.join(cell.rjust(width) for cell, width in zip(row, widths)).rstrip()
-                     for row in table)
-
-
-def _markdown_cell(text):
-    return str(text).replace('|', '\\|').replace('\n', ' ')
-
-
-# -------------------------------------------------------------------- figures
-
-def _pyplot():
-    import matplotlib
-    matplotlib.use('Agg')
-    from matplotlib import pyplot
-    return pyplot
-
-
-def _scale(axes, values):
-    finite = values[np.isfinite(values)]
-    if len(finite) and finite.min() > 0 and finite.max() > 20 * finite.min():
-        axes.set_yscale('log')
-
-
-def plot_convergence(path, generations, names, title, restarts=()):
-    """
-    Plot best and median of each objective per generation, and the best fitness so far.
-
-    restarts: core.restarts Restart records; each restart is a dashed line at its generation.
-    """
-    pyplot = _pyplot()
-    panels = len(names) + 1
-    columns = min(panels, 3)
-    rows = -(-panels // columns)
-    figure, axes = pyplot.subplots(rows, columns, figsize=(4.2 * columns, 3.2 * rows),
-                                   squeeze=False)
-    x = np.arange(len(generations))
-    changes = [index for index in range(1, len(generations))
-               if generations.structures[index] != generations.structures[index - 1]]
-    for index, name in enumerate(names + ['fitness of the best design so far']):
-        ax = axes.flat[index]
-        if index < len(names):
-            ax.plot(x, generations.best[:, index], label='best', color='tab:blue')
-            ax.plot(x, generations.median[:, index], label='median', color='tab:orange')
-            _scale(ax, np.concatenate([generations.best[:, index],
-                                       generations.median[:, index]]))
-            ax.legend(fontsize='small')
-        else:
-            ax.plot(x, generations.best_fitness, color='tab:green')
-            _scale(ax, generations.best_fitness)
-        if ax.get_yscale() == 'linear':
-            ax.ticklabel_format(axis='y', useOffset=False)
-        for change in changes:
-            ax.axvline(change - 0.5, color='grey', linestyle=':', linewidth=0.8)
-        for restart in restarts[1:]:
-            ax.axvline(restart.generation - 0.5, color='tab:red', linestyle='--',
-                       linewidth=0.8)
-        if changes:
-            for start in [0] + changes:
-                ax.text(start - 0.4, 0.98, 'x'.join(map(str, generations.structures[start])),
-                        transform=ax.get_xaxis_transform(), fontsize='x-small',
-                        verticalalignment='top', color='dimgrey')
-        ax.set_title(name, fontsize='medium')
-        ax.xaxis.get_major_locator().set_params(integer=True)
-        ax.set_xlabel('generation' + (' (all structures)' if changes else ''))
-        ax.grid(True, alpha=0.3)
-    for ax in list(axes.flat)[panels:]:
-        ax.axis('off')
-    figure.suptitle(f'convergence of {title}' if title else 'convergence', fontsize='medium')
-    figure.tight_layout()
-    figure.savefig(path, dpi=100)
-    pyplot.close(figure)
-    return pathlib.Path(path)
-
-
-def plot_archive(path, archive, title):
-    """Plot a quality-diversity archive: its grid over two descriptors, colour = fitness."""
-    pyplot = _pyplot()
-    grid = archive.fitness_grid()
-    names, units = archive.describe.names, archive.describe.units
-    (x_low, x_high), (y_low, y_high) = archive.ranges
-    figure, ax = pyplot.subplots(figsize=(6.4, 5.0))
-    # a cell's fitness is its elite's weighted sum (lower is better): the best cells darkest.
-    # Cells far above the others (a start collision costs 10,000 per objective) would flatten
-    # the scale: above 10 times the median cell they are drawn grey, off the scale.
-    shown = np.ma.masked_invalid(grid.T)
-    values = grid[np.isfinite(grid)]
-    ceiling = 10.0 * abs(float(np.median(values)))
-    within = values[values <= ceiling]
-    colormap = pyplot.get_cmap('viridis').with_extremes(over='lightgrey')
-    image = ax.pcolormesh(np.linspace(x_low, x_high, archive.cells[0] + 1),
-                          np.linspace(y_low, y_high, archive.cells[1] + 1), shown,
-                          cmap=colormap, shading='flat',
-                          vmax=float(within.max()) if len(within) else None)
-    over = len(values) - len(within)
-    best = archive.result
-    # the result is its cell's elite; its descriptors may be outcomes, not in the genome
-    point = next((elite.descriptors for elite in archive.elites()
-                  if best is not None and elite.candidate_id == best.candidate_id), None)
-    if point is not None:
-        ax.plot(point[0], point[1], marker='*', markersize=14, color='tab:red',
-                markeredgecolor='white', linestyle='none',
-                label=f'recommended: candidate {best.candidate_id} ({best.fitness:.4g})')
-    if over:
-        ax.fill_between([], [], color='lightgrey',
-                        label=f'over 10 x the median cell ({over} cell{"s" if over > 1 else ""})')
-    if point is not None or over:
-        ax.legend(fontsize='small', loc='upper right')
-    figure.colorbar(image, ax=ax, extend='max' if over else 'neither',
-                    label='weighted sum of the objectives (lower is better)')
-    ax.set_xlabel(f'{names[0]} ({units[0]})' if units[0] else names[0])
-    ax.set_ylabel(f'{names[1]} ({units[1]})' if units[1] else names[1])
-    filled = int(np.isfinite(grid).sum())
-    ax.set_title(f'{archive.algorithm} archive of {title}: {filled} of {grid.size} cells',
-                 fontsize='medium')
-    figure.savefig(path, dpi=100)
-    pyplot.close(figure)
-    return pathlib.Path(path)
-
-
-def plot_pareto(path, fronts, names):
-    """Plot the Pareto front of every generation (colour = generation) for objective pairs."""
-    pyplot = _pyplot()
-    pairs = [(i, j) for i in range(len(names)) for j in range(i + 1, len(names))][:6]
-    if not pairs:
-        pairs = [(0, 0)]
-    columns = min(len(pairs), 3)
-    rows = -(-len(pairs) // columns)
-    figure, axes = pyplot.subplots(rows, columns, figsize=(4.6 * columns, 3.8 * rows),
-                                   squeeze=False)
-    colormap = pyplot.get_cmap('viridis')
-    count = len(fronts)
-    for ax, (i, j) in zip(axes.flat, pairs):
-        for order, (_, generation, front) in enumerate(fronts):
-            colour = colormap(order / max(count - 1, 1))
-            ax.scatter(front[:, i], front[:, j], s=8, color=colour, alpha=0.6)
-        last = fronts[-1][2]
-        ordered = last[np.argsort(last[:, i])]
-        ax.plot(ordered[:, i], ordered[:, j], 'o-', color='tab:red', markersize=3,
-                linewidth=1, label=f'final front (generation {fronts[-1][1]})')
-        ax.set_xlabel(names[i])
-        ax.set_ylabel(names[j])
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize='small')
-    for ax in list(axes.flat)[len(pairs):]:
-        ax.axis('off')
-    mappable = pyplot.cm.ScalarMappable(cmap=colormap)
-    mappable.set_clim(fronts[0][0], max(fronts[-1][0], fronts[0][0] + 1))
-    figure.colorbar(mappable, ax=list(axes.flat), label='generation (all structures, in order)')
-    figure.suptitle('Pareto front per generation', fontsize='medium')
-    figure.savefig(path, dpi=100)
-    pyplot.close(figure)
-    return pathlib.Path(path)
+        return aligned_table(table)

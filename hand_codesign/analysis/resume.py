@@ -1,7 +1,7 @@
 """
 Resuming an interrupted run from its bag: `hand-codesign run --resume BAG`.
 
-This module only reads the bag; `core.resume.rebuild_search` rebuilds the search from what
+This module only reads the bag; `core.search.resume.rebuild_search` rebuilds the search from what
 it read (a fresh search of the run's task and seed told the recorded objectives). The recorded
 objectives come from the GenerationSummary messages (`told_ids` / `told_objectives`: exactly
 what the optimizer was told) and, for the batch in flight when the run stopped, from the
@@ -9,7 +9,7 @@ Evaluation messages (the first successful answer per candidate, as the optimizer
 Every replayed genome is checked against the recorded Candidate messages.
 
     point = resume_point('bags/task5-...')      # ResumePoint
-    point.search                                 # core.search.Search, at the interruption
+    point.search                                 # core.search.search.Search, at the interruption
     point.known                                  # id -> objectives of the pending batch known
                                                  # from the bag: do not evaluate those again
 
@@ -20,8 +20,8 @@ where the interrupted run stopped, and the final result equals an uninterrupted 
 from hand_codesign.analysis import records
 from hand_codesign.analysis.records import recorded_evaluations
 from hand_codesign.analysis.records import told_objectives
-from hand_codesign.core.resume import rebuild_search
-from hand_codesign.core.resume import ResumePoint
+from hand_codesign.core.search.resume import rebuild_search
+from hand_codesign.core.search.resume import ResumePoint
 import numpy as np
 
 

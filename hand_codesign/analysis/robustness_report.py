@@ -1,8 +1,8 @@
 """
 `hand-codesign robustness BAG [--samples N] [--out DIR] [--workers P]`: Fig. 3 for a run.
 
-Evaluates the run's best design on many world states with `core.robustness` on P processes
-(default: every core) and writes into DIR (default `<bag>_robustness` next to the bag):
+Evaluates the run's best design on many world states with `core.experiments.robustness` on P
+processes (default: every core) and writes into DIR (default `<bag>_robustness` next to the bag):
 
 - `worlds.csv`: one row per world: its randomized values, the object's position (m) and
   orientation (rad) error with respect to the last goal at the start and at the end,
@@ -23,7 +23,7 @@ side.
 
 World states: when N is v ** k for the k quantities the task randomizes (default 15,625 =
 5 ** 6, the paper's), the grid of v evenly spaced values per quantity, all combinations
-(`core.worlds.grid_world_states`); otherwise N worlds drawn uniformly from the task's ranges
+(`core.sim.worlds.grid_world_states`); otherwise N worlds drawn uniformly from the task's ranges
 with a seed derived from the run's seed (other worlds than those the run optimized on).
 """
 
@@ -32,11 +32,12 @@ import pathlib
 import time
 
 from hand_codesign.analysis import records
-from hand_codesign.analysis.report import write_csv
-from hand_codesign.core.robustness import evaluate_robustness
-from hand_codesign.core.worlds import grid_world_states
-from hand_codesign.core.worlds import randomized_quantities
-from hand_codesign.core.worlds import world_states
+from hand_codesign.analysis.tables import write_csv
+from hand_codesign.core.experiments.robustness import evaluate_robustness
+from hand_codesign.core.sim.worlds import grid_world_states
+from hand_codesign.core.sim.worlds import randomized_quantities
+from hand_codesign.core.sim.worlds import world_states
+from hand_codesign.core.task.variant import Variant
 from hand_codesign.errors import UserError
 from hand_codesign.outputs import staged
 import numpy as np
@@ -61,7 +62,7 @@ def robustness_command(arguments):
     if bests:
         return structures_command(record, bests, arguments.samples, workers, out)
     design = records.recorded_design(record, records.best_candidate_id(record))
-    task = records.run_task_of(record, design.structure or None)
+    task = records.run_task_of(record, Variant(structure=tuple(design.structure)))
     worlds, how = robustness_worlds(task, arguments.samples)
     print(f'evaluating candidate {design.candidate_id} (generation {design.generation}, '
           f'structure {list(design.structure)}) on {len(worlds)} world states ({how}) with '
@@ -91,7 +92,7 @@ def structures_command(record, bests, samples, workers, out):
     reports = []
     for structure, candidate_id in bests:
         design = records.recorded_design(record, candidate_id)
-        task = records.run_task_of(record, structure)
+        task = records.run_task_of(record, Variant(structure=tuple(structure)))
         worlds, how = robustness_worlds(task, samples)
         print(f'structure {list(structure)}: evaluating its best design, candidate '
               f'{candidate_id}, on {len(worlds)} world states ({how}) with {workers} processes')

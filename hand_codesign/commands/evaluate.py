@@ -19,7 +19,7 @@ from hand_codesign.analysis.records import require_run_info
 from hand_codesign.analysis.rig_report import rig_comparison
 from hand_codesign.commands.run import rig_parameters
 from hand_codesign.commands.run import termination_as_interrupt
-from hand_codesign.core.reevaluation import plan_text
+from hand_codesign.core.rig.reevaluation import plan_text
 from hand_codesign.errors import UserError
 from hand_codesign.ros.runner import claimed_domain
 from hand_codesign.ros.runner import System

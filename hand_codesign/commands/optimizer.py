@@ -12,7 +12,7 @@ from hand_codesign.ros import optimizer_node
 
 
 def load_resume(bag):
-    """Return the core.resume.ResumePoint of the interrupted run recorded in bag."""
+    """Return the core.search.resume.ResumePoint of the interrupted run recorded in bag."""
     # imported here: a fresh run never reads a bag and starts without the bag readers
     from hand_codesign.analysis.resume import resume_point
     return resume_point(bag)

@@ -6,7 +6,7 @@ dependencies, cdr messages, closed with its summary and footer), written like a 
 hand_codesign.ros.mcap_writer. Per frame of the animation (25 per simulated second):
 
 - contract.REPLAY_MARKERS, visualization_msgs/MarkerArray: the hand drawn from its simulated
-  link frames with core.geometry's shapes (the very shapes of the best_design topic), the
+  link frames with core.sim.geometry's shapes (the very shapes of the best_design topic), the
   object at its simulated pose, a translucent copy of it at every goal pose;
 - contract.REPLAY_GOAL, geometry_msgs/PoseStamped: the goal in effect (the next one due,
   after the last one the last one).
@@ -22,11 +22,11 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped
 from hand_codesign.analysis.replay import rollout_poses
 from hand_codesign.core import contract
-from hand_codesign.core.geometry import GOAL_COLOUR
-from hand_codesign.core.geometry import goal_poses
-from hand_codesign.core.geometry import hand_shapes
-from hand_codesign.core.geometry import object_shapes
-from hand_codesign.core.worlds import object_state
+from hand_codesign.core.sim.geometry import GOAL_COLOUR
+from hand_codesign.core.sim.geometry import goal_poses
+from hand_codesign.core.sim.geometry import hand_shapes
+from hand_codesign.core.sim.geometry import object_shapes
+from hand_codesign.core.sim.worlds import object_state
 from hand_codesign.errors import UserError
 from hand_codesign.outputs import staged
 from hand_codesign.ros.conversions import markers_message

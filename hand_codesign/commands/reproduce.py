@@ -1,12 +1,12 @@
 """
 `hand-codesign reproduce EXPERIMENT [--budget B] [--seeds S] [--evaluators E] [--out DIR]`.
 
-Runs one of the paper's experiments (core.experiments; `reproduce --list` names them) as a
+Runs one of the paper's experiments (core.experiments.catalog; `reproduce --list` names them) as a
 campaign: every configuration once per seed (`--seeds 3`: 1 to 3, the tuning seeds;
 `--seeds 101-105`: fresh seeds for headline figures; or a list `4,7`), each a normal
 `hand-codesign run` with its own bag under DIR/runs/, then measures every final design on
-worlds it never trained on (core.measures) and writes the experiment's tables (`.csv`, `.md`,
-a row per configuration) and figures into DIR (layout: hand_codesign.analysis.campaign).
+worlds it never trained on (core.experiments.measures) and writes the experiment's tables (`.csv`,
+`.md`, a row per configuration) and figures into DIR (layout: hand_codesign.analysis.campaign).
 `--only` runs some of the experiment's configurations: a new lever beside a campaign that
 already measured the others.
 
@@ -27,10 +27,11 @@ import time
 
 from hand_codesign.analysis import campaign
 from hand_codesign.commands.run import termination_as_interrupt
-from hand_codesign.core import experiments, preview
-from hand_codesign.core.hierarchy import GROWN_FROM
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.summary import format_duration
+from hand_codesign.core.experiments import catalog
+from hand_codesign.core.run import preview
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.run.summary import format_duration
+from hand_codesign.core.search.hierarchy import GROWN_FROM
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 import numpy as np
@@ -43,9 +44,9 @@ STOP_WAIT = 120.0  # s a run may take to close its bag after an interruption
 def reproduce_command(arguments):
     """Run (or continue) an experiment's campaign and write its tables; return exit code."""
     if arguments.list:
-        for name in experiments.experiment_names():
+        for name in catalog.experiment_names():
             summary = ('every experiment of the paper above, one after the other'
-                       if name == experiments.ALL else experiments.EXPERIMENTS[name].summary)
+                       if name == catalog.ALL else catalog.EXPERIMENTS[name].summary)
             print(f'{name}  {summary}')
         return 0
     chosen = chosen_experiments(arguments.experiment)
@@ -59,7 +60,7 @@ def reproduce_command(arguments):
     for item in campaigns:
         item.prepare()
         print(f'reproduce: {item.experiment.name}, budget {item.budget.describe()}; '
-              f'{experiments.seeds_text(item.seeds)}; {len(item.runs)} runs of '
+              f'{catalog.seeds_text(item.seeds)}; {len(item.runs)} runs of '
               f'{arguments.evaluators} evaluators; '
               f'folder {item.out}', flush=True)
     progress = Progress(sum(len(item.runs) for item in campaigns))
@@ -81,12 +82,12 @@ def chosen_experiments(name):
     """Return the Experiments of a name (all of them for `all`), or raise UserError."""
     if name is None:
         raise UserError('name an experiment (see `hand-codesign reproduce --list`)')
-    if name == experiments.ALL:
-        return experiments.paper_experiments()
-    if name not in experiments.EXPERIMENTS:
+    if name == catalog.ALL:
+        return catalog.paper_experiments()
+    if name not in catalog.EXPERIMENTS:
         raise UserError(f'unknown experiment "{name}"; expected one of '
-                        f'{", ".join(experiments.experiment_names())}')
-    return [experiments.EXPERIMENTS[name]]
+                        f'{", ".join(catalog.experiment_names())}')
+    return [catalog.EXPERIMENTS[name]]
 
 
 def chosen_configurations(experiment, keys):
@@ -108,7 +109,7 @@ def check_arguments(arguments):
     if arguments.seeds is None:
         return None
     try:
-        return experiments.parse_seeds(arguments.seeds)
+        return catalog.parse_seeds(arguments.seeds)
     except ValueError as error:
         raise UserError(str(error)) from None
 
@@ -208,12 +209,12 @@ class Campaign:
         for configuration in self.experiment.configurations:
             task_file = self.task_file(configuration)
             if not task_file.exists():
-                preset = experiments.pinned_dir() / configuration.preset
+                preset = catalog.pinned_dir() / configuration.preset
                 try:
                     text = preset.read_text(encoding='utf-8')
                 except OSError as error:
                     raise UserError(f'{preset}: cannot read the pinned preset: {error}')
-                task_file.write_text(experiments.configuration_task_text(configuration, text),
+                task_file.write_text(catalog.configuration_task_text(configuration, text),
                                      encoding='utf-8')
             try:
                 self.run_task(configuration, self.seeds[0])
@@ -227,7 +228,7 @@ class Campaign:
         """Return the Task of one run (the campaign's task text and the budget)."""
         return load_run_task(self.task_file(configuration), seed, self.budget.iterations,
                              self.budget.population,
-                             experiments.training_worlds(configuration, self.budget))
+                             catalog.training_worlds(configuration, self.budget))
 
     def cost(self, configuration):
         """
@@ -260,7 +261,7 @@ class Campaign:
     def run_all(self, progress, evaluators):
         """Run, resume or skip every run of the campaign, and measure each."""
         for configuration, seed in self.runs:
-            key = experiments.run_key(configuration, seed)
+            key = catalog.run_key(configuration, seed)
             if self.measured(configuration, seed):
                 progress.announce(key, 'finished and measured: kept')
                 continue
@@ -277,7 +278,7 @@ class Campaign:
 
     def run_one(self, configuration, seed, evaluators):
         """Run (or resume) one run to its end; return its finished bag."""
-        key = experiments.run_key(configuration, seed)
+        key = catalog.run_key(configuration, seed)
         self.runs_dir.mkdir(parents=True, exist_ok=True)
         previous = campaign.attempts(self.runs_dir, key)
         bag = campaign.next_attempt(self.runs_dir, key)
@@ -329,7 +330,7 @@ class Campaign:
     # ---------------------------------------------------------------- measures
 
     def measures_path(self, configuration, seed, suffix=''):
-        return self.out / 'measures' / f'{experiments.run_key(configuration, seed)}{suffix}.json'
+        return self.out / 'measures' / f'{catalog.run_key(configuration, seed)}{suffix}.json'
 
     def measured(self, configuration, seed):
         """Return True if the run is finished and every measure of it is cached."""
@@ -349,7 +350,7 @@ class Campaign:
                                  lambda: campaign.measure_bag(bag, tolerance, count, processes),
                                  self.error_kinds())
         if self.experiment.per_structure:
-            bags = campaign.attempts(self.runs_dir, experiments.run_key(configuration, seed))
+            bags = campaign.attempts(self.runs_dir, catalog.run_key(configuration, seed))
             campaign.cached_measures(
                 self.measures_path(configuration, seed, '.structures'),
                 lambda: campaign.measure_structures(bags, tolerance, count, processes))
@@ -361,5 +362,5 @@ class Campaign:
         paths = campaign.write_results(self.out, self.experiment, self.budget, self.seeds,
                                        self.figure_format)
         print(f'reproduce: {self.experiment.name} ({self.budget.describe()}, '
-              f'{experiments.seeds_text(self.seeds)}): '
+              f'{catalog.seeds_text(self.seeds)}): '
               f'{", ".join(str(path) for path in paths)}', flush=True)

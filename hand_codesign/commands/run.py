@@ -2,7 +2,7 @@
 `hand-codesign run`: a co-design as separate processes, fresh or resumed from a bag.
 
 This command checks the flags, loads the run's task (from the task file, or for `--resume`
-from the bag through hand_codesign.analysis.resume), draws the run's secret (core.signing)
+from the bag through hand_codesign.analysis.resume), draws the run's secret (core.run.signing)
 and writes the key files asked for, lets hand_codesign.ros.runner start and stop the
 processes, and prints where the bag and the best design are.
 """
@@ -15,11 +15,11 @@ import signal
 import sys
 import time
 
-from hand_codesign.core.runs import load_run_task
-from hand_codesign.core.signing import new_secret
-from hand_codesign.core.signing import RunKeys
-from hand_codesign.core.supervision import evaluator_role
-from hand_codesign.core.supervision import serves_role
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.run.signing import new_secret
+from hand_codesign.core.run.signing import RunKeys
+from hand_codesign.core.run.supervision import evaluator_role
+from hand_codesign.core.run.supervision import serves_role
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 from hand_codesign.ros.discovery import DiscoveryServer
@@ -141,7 +141,7 @@ def write_key_file(path, text):
 
 
 def own_roles(arguments):
-    """Return the roles of the evaluators this run starts itself (core.supervision)."""
+    """Return the roles of the evaluators this run starts itself (core.run.supervision)."""
     return [evaluator_role(index) for index in range(arguments.evaluators)]
 
 

@@ -1,10 +1,17 @@
 """
 Pure-Python core of hand_codesign: tasks, hand model, simulation, objectives, optimizers.
 
+Its rooms (docs/ARCHITECTURE.md): task/ (the schema, reading, checks, genome, Variant), sim/
+(hand, worlds, policies, objectives, the PyBullet and MuJoCo engines), search/ (optimizers and
+their registry, hierarchy, stages, horizon, resampling, resume), run/ (what the optimizer
+node decides), rig/ (hardware in the loop) and experiments/ (the paper's experiments and their
+measures); at the root evaluate() and the shared vocabulary (contract, design, rotations,
+outcomes).
+
 The names below are loaded on first use (PEP 562), not when the package is imported: the
 simulator imports PyBullet, which silences the process's standard streams while it loads, and
 the optimizer or an analysis never simulate. ``import hand_codesign.core.task`` loads the task
-module alone; ``hand_codesign.core.evaluate`` loads the simulator when it is first touched.
+room alone; ``hand_codesign.core.evaluate`` loads the simulator when it is first touched.
 """
 
 import importlib
@@ -13,12 +20,12 @@ import types
 
 # exported name -> the submodule of core that defines it
 _EXPORTS = {
-    'decode': 'genome', 'genome_spec': 'genome', 'GenomeSpec': 'genome',
-    'objective_names': 'genome',
+    'decode': 'task.genome', 'genome_spec': 'task.genome', 'GenomeSpec': 'task.genome',
+    'objective_names': 'task.genome',
     'evaluate': 'evaluate', 'Evaluation': 'evaluate',
-    'Simulator': 'sim',
+    'Simulator': 'sim.pybullet_sim',
     'load_task': 'task', 'parse_task': 'task', 'Task': 'task', 'TaskError': 'task',
-    'grid_world_states': 'worlds', 'world_states': 'worlds', 'WorldState': 'worlds',
+    'grid_world_states': 'sim.worlds', 'world_states': 'sim.worlds', 'WorldState': 'sim.worlds',
 }
 
 __all__ = sorted(_EXPORTS, key=str.lower)

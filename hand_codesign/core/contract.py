@@ -16,7 +16,7 @@ CANDIDATES = 'candidates'
 EVALUATIONS = 'evaluations'
 EVALUATOR_STATUS = 'evaluator_status'
 GENERATION_SUMMARY = 'generation_summary'
-# Hardware in the loop (hand_codesign.core.rig): a rig evaluator's trial requests, the rig's
+# Hardware in the loop (hand_codesign.core.rig.trials): a rig evaluator's trial requests, the rig's
 # trial events and the object's measured pose.
 TRIAL_REQUESTS = 'rig/trial_requests'
 TRIAL_STATUS = 'rig/trial_status'
@@ -57,7 +57,7 @@ TOPIC_TYPES = {**LOOP_TOPIC_TYPES, **RIG_TOPIC_TYPES}
 
 # What a 3D viewer (Foxglove, Lichtblick, RViz) draws: standard messages beside the loop's,
 # recorded in the bag too. With each generation summary the optimizer publishes the best
-# design so far (core.geometry's shapes) as markers in the frame WORLD_FRAME.
+# design so far (core.sim.geometry's shapes) as markers in the frame WORLD_FRAME.
 BEST_DESIGN = 'best_design'
 MARKER_ARRAY_TYPE = 'visualization_msgs/msg/MarkerArray'
 WORLD_FRAME = 'world'

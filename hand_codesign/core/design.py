@@ -1,7 +1,7 @@
 """
 A decoded candidate in physical units: the hand's morphology and its controller.
 
-The genome (hand_codesign.core.genome) decodes into a Design; the simulator builds a Design,
+The genome (hand_codesign.core.task.genome) decodes into a Design; the simulator builds a Design,
 the URDF export writes one, and a seeded search starts from one. All values are SI: metres,
 radians, kilograms, newton metres.
 

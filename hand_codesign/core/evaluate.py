@@ -7,7 +7,7 @@ simulated, eq. 5) and runs one rollout per world. Each world gives h_o per objec
 inner mean, eq. 6 when early termination cut it, UNSTABLE_PENALTY when the simulation became
 unstable); the objectives are their mean over the worlds plus the torque penalty of eq. (2),
 or with `worlds: {aggregate: worst, fraction: f}` the mean over each objective's worst f of
-the worlds (CVaR, core.objectives.worst_mean) plus that penalty.
+the worlds (CVaR, core.sim.objectives.worst_mean) plus that penalty.
 
 An unstable world counts UNSTABLE_PENALTY in its objectives. Under the mean it weighs 1 / n;
 under the worst fraction it is always among the worst worlds and weighs 1 / (f n), so f n <= 1
@@ -27,14 +27,14 @@ shares of the worlds (`outcome_names`, `outcomes`); a design that starts in coll
 from dataclasses import dataclass, field
 from typing import Optional, Sequence, Tuple
 
-from hand_codesign.core.genome import genome_spec
-from hand_codesign.core.hand import hand_model
-from hand_codesign.core.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
-                                           task_torque_penalty, weighted_fitness)
 from hand_codesign.core.outcomes import OutcomeWatch, task_outcomes
-from hand_codesign.core.policies import make_policy
-from hand_codesign.core.sim import Simulator
-from hand_codesign.core.worlds import object_state, world_states
+from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
+                                               task_torque_penalty, weighted_fitness)
+from hand_codesign.core.sim.policies import make_policy
+from hand_codesign.core.sim.pybullet_sim import Simulator
+from hand_codesign.core.sim.worlds import object_state, world_states
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 
 # h_o of every objective of a world whose simulation became unstable (NaN or exploding):
@@ -77,10 +77,10 @@ def shared_simulator(engine='pybullet'):
 
 
 def new_simulator(engine):
-    """Return a new simulator of `engine`: 'pybullet' (core.sim) or 'mujoco'."""
+    """Return a new simulator of `engine`: 'pybullet' (core.sim.pybullet_sim) or 'mujoco'."""
     if engine == 'mujoco':
         # imported on first use: loading MuJoCo costs a process about 0.2 s
-        from hand_codesign.core.mujoco_sim import MujocoSimulator
+        from hand_codesign.core.sim.mujoco_sim import MujocoSimulator
         return MujocoSimulator()
     return Simulator()
 
@@ -132,8 +132,21 @@ def evaluate(x, task, worlds: Optional[Sequence] = None, on_world=None) -> 'Eval
     """
     Return the Evaluation of normalized genome x on `task` (default worlds: the task's).
 
+    x: the normalized genome, array-like of shape (genome_spec(task).size,), values folded
+    into [0, 1] (outside values are mirrored back, never rejected). task: a core.task.Task,
+    whose physics.engine chooses the simulator. worlds: WorldStates (core.sim.worlds) to
+    evaluate on, default world_states(task), the task's num_world_states training worlds.
     `on_world(index, simulator)`, if given, is called before each world's rollout: a caller
     that must stay responsive (an evaluator's heartbeats) does its chores there.
+
+    The Evaluation holds `objectives` (shape (objectives,), in task.objective_names' order:
+    position errors in m, orientation errors in rad, eq. 5 over the worlds with the torque
+    penalty), `fitness` (their sum weighted by task.objective_weights), `world_objectives`
+    (shape (worlds, objectives)), `initial_errors` and `final_errors` (shape (worlds, 2): m,
+    rad), `final_poses` (shape (worlds, 7): m, then a quaternion x, y, z, w), the simulated
+    time (s), the count of unstable worlds and whether the design starts in collision (every
+    objective then COLLISION_PENALTY). Deterministic: the same x, task and worlds give the same
+    bits in any process. Raises ValueError for a genome of the wrong size.
     """
     design = _TaskContext.of(task).genome_spec().decode(np.asarray(x, dtype=float))
     return evaluate_design(design, task, worlds, on_world=on_world)

@@ -1,8 +1,8 @@
 """
 Outcome descriptors: what a design did at the end of its rollouts, as shares of the worlds.
 
-A quality-diversity archive (core.quality_diversity) may span outcome descriptors besides
-those of the morphology (core.descriptors). They are measured in the very rollouts
+A quality-diversity archive (core.search.quality_diversity) may span outcome descriptors besides
+those of the morphology (core.task.descriptors). They are measured in the very rollouts
 `core.evaluate.evaluate_design` runs, by reading the scene once at the end of each world's
 rollout (its last step, or the goal check where early termination stopped it) before the
 object is removed; nothing in the scene changes, so the objectives stay bit-identical:
@@ -15,7 +15,7 @@ object is removed; nothing in the scene changes, so the objectives stay bit-iden
 
 A world the design starts in collision with is not simulated and counts as neither; so does
 a world whose simulation became unstable (its scene is not a resting state). Both are shares
-of all the candidate's worlds, in [0, 1]. core.measures applies the same rule on unseen
+of all the candidate's worlds, in [0, 1]. core.experiments.measures applies the same rule on unseen
 worlds (`resting_on_limit_touching`).
 
 They are computed only when the task's `optimizer.archive.descriptors` names one
@@ -57,8 +57,8 @@ def resting_on_reached_limit_touching(simulator):
     """
     Return True if some finger touches the object with a joint on a limit it reached.
 
-    The stricter rule of core.measures' "joint limits found": the joint rests on a limit
-    that its initial angle was not already on (reached_its_limit), so a design that starts a
+    The stricter rule of core.experiments.measures' "joint limits found": the joint rests on a
+    limit that its initial angle was not already on (reached_its_limit), so a design that starts a
     joint against a limit and never moves it does not count.
     """
     return limit_rests(simulator, (reached_its_limit,))[0]

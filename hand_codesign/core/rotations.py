@@ -1,7 +1,7 @@
 """
 Rotations as unit quaternions (x, y, z, w), PyBullet's order: the one home of this math.
 
-Eq. (4)'s angle between two orientations is an objective and lives in core/objectives.py;
+Eq. (4)'s angle between two orientations is an objective and lives in core/sim/objectives.py;
 everything here is plain geometry that the task reader, the worlds and the objectives share.
 """
 

@@ -5,8 +5,8 @@ A recorder killed with SIGKILL leaves its file without the chunk in progress, su
 footer (everything flushed before the kill is there), and its bag folder without
 metadata.yaml; rosbags and Foxglove refuse such a bag. `recover_file` rewrites the complete
 records of such a file into a closed, indexed file (schemas, channels and messages in their
-order, then a summary and a footer) and `write_metadata` writes the folder's metadata.yaml from
-the summaries of all its files: that is `hand-codesign recover BAG`.
+order, then a summary and a footer) and `write_metadata` (ros.bag_metadata) writes the folder's
+metadata.yaml from the summaries of all its files: that is `hand-codesign recover BAG`.
 
 A recorder restarted by the runner continues the same bag folder (`continue_bag`): it first
 recovers the files there, then writes the next one (`<name>_1.mcap`, `<name>_2.mcap`, ...).
@@ -28,19 +28,19 @@ No rclpy here: `hand-codesign recover` works on a machine without ROS.
 
 import os
 import pathlib
-import re
 import struct
 
-from hand_codesign.ros.mcap_writer import add_rosbag2_record
-from hand_codesign.ros.mcap_writer import bag_metadata
-from hand_codesign.ros.mcap_writer import file_information
+from hand_codesign.ros.bag_metadata import add_rosbag2_record
+from hand_codesign.ros.bag_metadata import bag_files
+from hand_codesign.ros.bag_metadata import BagRecoveryError
+from hand_codesign.ros.bag_metadata import file_information
+from hand_codesign.ros.bag_metadata import topic_information
+from hand_codesign.ros.bag_metadata import write_metadata
 from hand_codesign.ros.mcap_writer import LIBRARY
 from hand_codesign.ros.mcap_writer import message_key
 from hand_codesign.ros.mcap_writer import PROFILE
-from hand_codesign.ros.mcap_writer import topic_information
 from mcap.exceptions import EndOfFile
 from mcap.exceptions import McapError
-from mcap.reader import make_reader
 from mcap.records import Channel
 from mcap.records import Header
 from mcap.records import Message
@@ -48,22 +48,8 @@ from mcap.records import Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType
 from mcap.writer import Writer
-import yaml
 
-_FILE_INDEX = re.compile(r'_(\d+)\.mcap$')
 MCAP_MAGIC = b'\x89MCAP0\r\n'
-
-
-class BagRecoveryError(RuntimeError):
-    """A bag that cannot be recovered: missing, not MCAP, or without a readable start."""
-
-
-def bag_files(folder):
-    """Return the .mcap files of a bag folder in the order they were written (<name>_<k>)."""
-    def order(path):
-        match = _FILE_INDEX.search(path.name)
-        return (int(match.group(1)) if match else -1, path.name)
-    return sorted(pathlib.Path(folder).glob('*.mcap'), key=order)
 
 
 def records(path):
@@ -210,34 +196,3 @@ def recover_bag(path):
     if path.is_dir():
         write_metadata(path)
     return report
-
-
-def _file_summary(path):
-    """Return (channels, schema names, counts by channel id, start, end) of a closed file."""
-    with open(path, 'rb') as stream:
-        summary = make_reader(stream).get_summary()
-    if summary is None or summary.statistics is None:
-        raise BagRecoveryError(f'{path}: no summary; recover the bag first')
-    statistics = summary.statistics
-    names = {schema_id: schema.name for schema_id, schema in summary.schemas.items()}
-    return (summary.channels, names, statistics.channel_message_counts,
-            statistics.message_start_time, statistics.message_end_time,
-            statistics.message_count)
-
-
-def write_metadata(folder):
-    """Write the rosbag2 metadata.yaml of a bag folder from the summaries of all its files."""
-    folder = pathlib.Path(folder)
-    topics, files = {}, []
-    for path in bag_files(folder):
-        channels, names, counts, start, end, count = _file_summary(path)
-        for channel_id, channel in channels.items():
-            entry = topics.setdefault(channel.topic, topic_information(
-                channel.topic, names.get(channel.schema_id, ''),
-                channel.metadata.get('offered_qos_profiles'),
-                channel.metadata.get('topic_type_hash', ''), 0))
-            entry['message_count'] += counts.get(channel_id, 0)
-        files.append(file_information(path.name, start, end, count))
-    metadata = {'rosbag2_bagfile_information': bag_metadata(list(topics.values()), files)}
-    (folder / 'metadata.yaml').write_text(
-        yaml.safe_dump(metadata, sort_keys=False, default_flow_style=False), encoding='utf-8')

@@ -11,7 +11,7 @@ from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker
 from visualization_msgs.msg import MarkerArray
 
-# core.geometry's shape kinds -> Marker types
+# core.sim.geometry's shape kinds -> Marker types
 MARKER_TYPES = {'arrow': Marker.ARROW, 'box': Marker.CUBE, 'sphere': Marker.SPHERE,
                 'cylinder': Marker.CYLINDER}
 
@@ -26,24 +26,25 @@ def float_list(values):
     return np.asarray(values, dtype=float).ravel().tolist()
 
 
-def candidate_message(run_id, candidate, structure, genome_names, evaluator_id, attempt,
-                      world_states=0, design=None):
+def candidate_message(run_id, candidate, genome_names, evaluator_id, attempt, design=None):
     """
     Return the Candidate message sending an optimizer's candidate to an evaluator.
 
-    world_states: 0 evaluates it on the run's worlds; more for a hierarchy structure's check.
-    design: its core.physical.PhysicalDesign, for evaluators that do not decode genomes.
+    The candidate's Variant (core.task.variant) travels in the message's flat fields
+    (structure, world_states, horizon, stage, held_out_worlds, world_draw), which
+    core.run.evaluation_jobs.candidate_variant reads back into one Variant.
+    design: its core.sim.physical.PhysicalDesign, for evaluators that do not decode genomes.
     """
+    variant = candidate.variant
     message = Candidate(
         run_id=run_id, generation=int(candidate.generation),
         candidate_id=int(candidate.candidate_id),
         evaluator_id=evaluator_id, attempt=int(attempt),
-        structure=[int(joints) for joints in structure], genome=float_list(candidate.x),
-        horizon=float(getattr(candidate, 'horizon', 0.0)),
-        genome_names=list(genome_names), world_states=int(world_states),
-        stage=int(getattr(candidate, 'stage', 0)),
-        held_out_worlds=bool(getattr(candidate, 'held_out', False)),
-        world_draw=int(getattr(candidate, 'world_draw', 0)))
+        structure=[int(joints) for joints in variant.structure], genome=float_list(candidate.x),
+        horizon=float(variant.horizon),
+        genome_names=list(genome_names), world_states=int(variant.world_states),
+        stage=int(variant.stage), held_out_worlds=bool(variant.held_out),
+        world_draw=int(variant.world_draw))
     if design is not None:
         message.design_names = list(design.names)
         message.design_values = list(design.values)
@@ -105,7 +106,7 @@ def summary_message(run_id, summary):
 
 
 def shape_marker(shape, number, stamp, frame_id=WORLD_FRAME):
-    """Return the Marker of a core.geometry Shape; `number` is its id within its group."""
+    """Return the Marker of a core.sim.geometry Shape; `number` is its id within its group."""
     marker = Marker(ns=shape.group, id=int(number), type=MARKER_TYPES[shape.kind],
                     action=Marker.ADD, frame_locked=False)
     marker.header.frame_id = frame_id
@@ -122,7 +123,7 @@ def shape_marker(shape, number, stamp, frame_id=WORLD_FRAME):
 
 def markers_message(shapes, stamp, frame_id=WORLD_FRAME):
     """
-    Return the MarkerArray drawing core.geometry Shapes, numbered within each group.
+    Return the MarkerArray drawing core.sim.geometry Shapes, numbered within each group.
 
     It starts with a DELETEALL marker, so that a viewer drops the shapes of the previous
     array (a design of another structure has another number of segments).
@@ -139,7 +140,7 @@ def markers_message(shapes, stamp, frame_id=WORLD_FRAME):
 
 
 def trial_request(candidate, evaluator_id, trial_id, spec):
-    """Return the TrialRequest of one trial (a core.rig.TrialSpec) of a candidate."""
+    """Return the TrialRequest of one trial (a core.rig.trials.TrialSpec) of a candidate."""
     return TrialRequest(
         run_id=candidate.run_id, candidate_id=candidate.candidate_id,
         attempt=candidate.attempt, evaluator_id=evaluator_id, trial_id=int(trial_id),

@@ -1,7 +1,7 @@
 """
 The evaluator node: evaluates candidates with hand_codesign.core.evaluate and answers them.
 
-Which candidates it takes and what it evaluates are core.evaluation_jobs' rules; it answers
+Which candidates it takes and what it evaluates are core.run.evaluation_jobs' rules; it answers
 each candidate taken with an Evaluation or a rejection with the reason, never a crash; with a
 key (ros.keys) it takes only signed messages and signs its answers. Named after its evaluator
 id, two started alike do not clash. One thread does it all: between candidates and worlds
@@ -17,8 +17,8 @@ import sys
 import time
 
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.evaluation_jobs import CandidateRejected, EvaluatorInbox
-from hand_codesign.core.supervision import node_name
+from hand_codesign.core.run.evaluation_jobs import CandidateRejected, EvaluatorInbox
+from hand_codesign.core.run.supervision import node_name
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import evaluation_message, rejection_message, stamp_now
 from hand_codesign.ros.keys import evaluator_credential

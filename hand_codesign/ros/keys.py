@@ -1,5 +1,5 @@
 """
-The keys of a node and the signatures of its messages (hand_codesign.core.signing) over ROS.
+The keys of a node and the signatures of its messages (hand_codesign.core.run.signing) over ROS.
 
 A run's own processes get their keys from `hand-codesign run` through an environment variable
 (see hand_codesign.ros.runner for why), which is removed from the node's environment once
@@ -14,14 +14,14 @@ import pathlib
 import socket
 import stat
 
-from hand_codesign.core.signing import Credential
-from hand_codesign.core.signing import CREDENTIAL_VARIABLE
-from hand_codesign.core.signing import parse_secret
-from hand_codesign.core.signing import run_digest
-from hand_codesign.core.signing import RunKeys
-from hand_codesign.core.signing import SECRET_VARIABLE
-from hand_codesign.core.signing import SigningError
-from hand_codesign.core.signing import SummaryKey
+from hand_codesign.core.run.signing import Credential
+from hand_codesign.core.run.signing import CREDENTIAL_VARIABLE
+from hand_codesign.core.run.signing import parse_secret
+from hand_codesign.core.run.signing import run_digest
+from hand_codesign.core.run.signing import RunKeys
+from hand_codesign.core.run.signing import SECRET_VARIABLE
+from hand_codesign.core.run.signing import SigningError
+from hand_codesign.core.run.signing import SummaryKey
 from hand_codesign_msgs.msg import EvaluatorStatus
 
 

@@ -19,8 +19,8 @@ import foxglove
 from hand_codesign.core.contract import LIVE_READY
 from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
+from hand_codesign.ros.bag_metadata import MESSAGE_ENCODING
 from hand_codesign.ros.mcap_writer import message_definition
-from hand_codesign.ros.mcap_writer import MESSAGE_ENCODING
 from hand_codesign.ros.mcap_writer import SCHEMA_ENCODING
 from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only

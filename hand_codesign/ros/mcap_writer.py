@@ -49,19 +49,19 @@ import time
 
 from ament_index_python.packages import get_package_share_directory
 from ament_index_python.packages import PackageNotFoundError
+from hand_codesign.ros.bag_metadata import add_rosbag2_record
+from hand_codesign.ros.bag_metadata import file_information
+from hand_codesign.ros.bag_metadata import MESSAGE_ENCODING
+from hand_codesign.ros.bag_metadata import topic_information
+from hand_codesign.ros.bag_metadata import write_metadata
 from mcap.writer import CompressionType
 from mcap.writer import Writer
 import yaml
 
 PROFILE = 'ros2'
 SCHEMA_ENCODING = 'ros2msg'
-MESSAGE_ENCODING = 'cdr'
 LIBRARY = 'hand_codesign.mcap_writer'
 DEFINITION_DELIMITER = '=' * 80
-# rosbag2 reads a directory's metadata.yaml of version 9 (Jazzy) with QoS enums as names.
-METADATA_VERSION = 9
-# rosbag2's MCAP storage plugin keeps the bag's metadata in a metadata record of this name
-ROSBAG2_RECORD, ROSBAG2_RECORD_KEY = 'rosbag2', 'serialized_metadata'
 
 # The field-type pattern and primitive list of rosbag2's local message definition source:
 # keeping them identical makes our schema text byte-identical to the one rosbag2 writes.
@@ -213,61 +213,6 @@ def qos_profiles_yaml(profiles):
         return ''
     dicts = [qos_profile_dict(profile) for profile in profiles]
     return yaml.safe_dump(dicts, sort_keys=False, default_flow_style=False).rstrip('\n')
-
-
-def topic_information(topic, type_name, offered_qos_profiles, type_description_hash, count):
-    """Return rosbag2's TopicInformation of a topic (version 9: QoS profiles as a list)."""
-    return {'topic_metadata': {
-        'name': topic, 'type': type_name, 'serialization_format': MESSAGE_ENCODING,
-        'offered_qos_profiles': yaml.safe_load(offered_qos_profiles or '[]') or [],
-        'type_description_hash': type_description_hash},
-        'message_count': count}
-
-
-def file_information(name, start, end, count):
-    """Return rosbag2's FileInformation of one file (times in ns since the epoch)."""
-    return {'path': name, 'starting_time': {'nanoseconds_since_epoch': start if count else 0},
-            'duration': {'nanoseconds': end - start if count else 0}, 'message_count': count}
-
-
-def bag_metadata(topics, files):
-    """
-    Return rosbag2's BagMetadata (Jazzy, version 9) of TopicInformation and FileInformation.
-
-    The same record is metadata.yaml's `rosbag2_bagfile_information` and, serialized, the
-    `serialized_metadata` of the "rosbag2" metadata record inside each MCAP file (ROSBAG2_RECORD).
-    """
-    counted = [entry for entry in files if entry['message_count']]
-    start = min((entry['starting_time']['nanoseconds_since_epoch'] for entry in counted),
-                default=0)
-    end = max((entry['starting_time']['nanoseconds_since_epoch']
-               + entry['duration']['nanoseconds'] for entry in counted), default=0)
-    return {
-        'version': METADATA_VERSION,
-        'storage_identifier': 'mcap',
-        'duration': {'nanoseconds': end - start},
-        'starting_time': {'nanoseconds_since_epoch': start},
-        'message_count': sum(entry['message_count'] for entry in topics),
-        'topics_with_message_count': list(topics),
-        'compression_format': '',
-        'compression_mode': '',
-        'relative_file_paths': [entry['path'] for entry in files],
-        'files': list(files),
-        'custom_data': {},
-        'ros_distro': 'jazzy',
-    }
-
-
-def add_rosbag2_record(writer, topics, file):
-    """
-    Add the metadata record rosbag2's MCAP storage writes when it closes a file.
-
-    `ros2 bag info file.mcap` reads it (version, QoS format, distribution); without it rosbag2
-    falls back to defaults. topics: TopicInformation of the file; file: its FileInformation.
-    """
-    text = yaml.safe_dump(bag_metadata(topics, [file]), sort_keys=False,
-                          default_flow_style=False)
-    writer.add_metadata(ROSBAG2_RECORD, {ROSBAG2_RECORD_KEY: text})
 
 
 def holds_bag(folder):
@@ -435,6 +380,4 @@ class BagWriter:
 
     def _write_metadata_yaml(self):
         """Write the rosbag2 metadata.yaml of the bag directory, covering all its files."""
-        # imported here: bag_files builds on this module's constants
-        from hand_codesign.ros.bag_files import write_metadata
         write_metadata(self.bag_path)

@@ -1,5 +1,5 @@
 """
-The optimizer node: the run's RunController (hand_codesign.core.controller) over ROS 2.
+The optimizer node: the run's RunController (hand_codesign.core.run.controller) over ROS 2.
 
 It announces the run (RunInfo, latched), turns heartbeats and evaluations into controller
 calls, and its candidates, summaries and best designs (markers) into messages (ros.keys signs).
@@ -7,11 +7,11 @@ calls, and its candidates, summaries and best designs (markers) into messages (r
 
 import sys
 
-from hand_codesign.core.audits import DEFAULT_FRACTION
 from hand_codesign.core.contract import STATUS_REJECTED
-from hand_codesign.core.controller import default_run_id, RunController, write_result
-from hand_codesign.core.dispatch import DispatchError
-from hand_codesign.core.runs import load_run_task
+from hand_codesign.core.run.audits import DEFAULT_FRACTION
+from hand_codesign.core.run.controller import default_run_id, RunController, write_result
+from hand_codesign.core.run.dispatch import DispatchError
+from hand_codesign.core.run.runs import load_run_task
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
@@ -42,8 +42,8 @@ PARAMETERS = {
     'subscribers_expected': (0, 'other subscribers (recorders) to wait for', (0, 100)),
     'heartbeat_timeout': (5.0, 's of evaluator silence before its candidates move', (0.1, 3600.0)),
     'evaluation_timeout': (0.0, 's before a candidate is sent again; 0: adaptive', (0.0, 86400.0)),
-    'audit_fraction': (DEFAULT_FRACTION, 'share of answers audited (core.audits)', (0.0, 1.0)),
-    'own_evaluators': ('', "roles of the run's own evaluators, a,b: see core.audits", None),
+    'audit_fraction': (DEFAULT_FRACTION, 'share of answers audited (core.run.audits)', (0.0, 1.0)),
+    'own_evaluators': ('', "roles of the run's own evaluators, a,b: see core.run.audits", None),
     'result_file': ('', 'write the final result as JSON here; empty: do not', None),
     'resume_bag': ('', 'continue the run of this bag (task, seed, budget: from the bag)', None),
     'start_signal': (False, 'send nothing before a line on stdin (the recorder records)', None),
@@ -121,10 +121,9 @@ class OptimizerNode(Node):
             self.run.evaluated(*key, message.objectives, message.wall_time,
                                message.outcome_names, message.outcomes)
 
-    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, world_states, design):
+    def send_candidate(self, candidate, evaluator_id, attempt, genome_names, design):
         self.publish(topics.CANDIDATES, self.signer.candidate(candidate_message(
-            self.run.run_id, candidate, candidate.structure, genome_names, evaluator_id,
-            attempt, world_states, design)))
+            self.run.run_id, candidate, genome_names, evaluator_id, attempt, design)))
 
     def send_summary(self, summary):
         message = summary_message(self.run.run_id, summary)

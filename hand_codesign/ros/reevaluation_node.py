@@ -1,7 +1,7 @@
 """
 The re-evaluation node: sends recorded designs once more, to a simulation and a rig evaluator.
 
-`hand-codesign evaluate BAG --rig` starts it with a plan (hand_codesign.core.reevaluation):
+`hand-codesign evaluate BAG --rig` starts it with a plan (hand_codesign.core.rig.reevaluation):
 it announces the plan's run (RunInfo, latched), waits for `evaluators_expected` evaluators'
 heartbeats, sends every candidate once to any evaluator (with its design in physical terms,
 as the optimizer sends it) and ends once each has a simulated and a measured answer, or
@@ -12,9 +12,9 @@ import pathlib
 import sys
 import time
 
-from hand_codesign.core.physical import candidate_design
-from hand_codesign.core.reevaluation import AnswerBook, read_plan
-from hand_codesign.core.runs import run_task
+from hand_codesign.core.rig.reevaluation import AnswerBook, read_plan
+from hand_codesign.core.run.runs import run_task
+from hand_codesign.core.sim.physical import candidate_design
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import candidate_message
 from hand_codesign.ros.conversions import stamp_now
@@ -87,12 +87,11 @@ class ReevaluationNode(Node):
         fields = self.run_fields
         for candidate in self.planned:
             task = run_task(fields['task_yaml'], f'run {fields["run_id"]} task', fields['seed'],
-                            fields['iterations'], fields['population'],
-                            candidate.world_states or fields['world_states'],
-                            candidate.structure, candidate.horizon or None)
+                            fields['iterations'], fields['population'], fields['world_states'],
+                            candidate.variant)
             self.publishers_[topics.CANDIDATES].publish(candidate_message(
-                fields['run_id'], candidate, candidate.structure, candidate.genome_names, '',
-                0, candidate.world_states, candidate_design(task, candidate.x)))
+                fields['run_id'], candidate, candidate.genome_names, '', 0,
+                candidate_design(task, candidate.x)))
         self.sent = True
 
 

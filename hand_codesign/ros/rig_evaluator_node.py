@@ -2,7 +2,7 @@
 The rig evaluator node: evaluates candidates by trials on a test rig and answers them.
 
 An evaluator like any other to the optimizer (same candidates, Evaluations and heartbeats);
-what it decides is core.rig.RigEvaluator's: for each world of a candidate it publishes a
+what it decides is core.rig.trials.RigEvaluator's: for each world of a candidate it publishes a
 TrialRequest on rig/trial_requests, hears the rig on rig/trial_status (started, ended, start
 collision, failed), collects the object's geometry_msgs/PoseStamped on rig/object_pose and
 scores the measured traces with the core's objectives. The recorder keeps all three rig
@@ -15,7 +15,7 @@ import sys
 import time
 
 from hand_codesign.core import contract
-from hand_codesign.core.rig import RigEvaluator
+from hand_codesign.core.rig.trials import RigEvaluator
 from hand_codesign.ros import topics
 from hand_codesign.ros.conversions import evaluation_message
 from hand_codesign.ros.conversions import rejection_message

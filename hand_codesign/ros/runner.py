@@ -8,7 +8,7 @@ relays the optimizer's progress; when the optimizer ends (or on Ctrl-C) stops th
 then the recorder, so that the bag holds every message and is closed properly.
 
 While the optimizer runs, the recorder and the evaluators are supervised: when one exits,
-core.supervision.Supervisor decides whether it is started again (a restarted recorder continues
+core.run.supervision.Supervisor decides whether it is started again (a restarted recorder continues
 the bag in its next file, a restarted evaluator serves under a new id and a unique node name)
 or whether the run gives up and stops cleanly; this module only starts and stops processes.
 A live view for Foxglove (`--live`) and a rig's nodes (`--rig`) run beside them, unsupervised.
@@ -18,7 +18,7 @@ the start) and a discovery range that reaches this host, e.g.
 `ROS_DOMAIN_ID=17 ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET ros2 run hand_codesign evaluator`, or
 through the run's discovery server (ros.discovery) where the network carries no multicast.
 
-Keys (hand_codesign.core.signing): the optimizer gets the run's secret, each evaluator only
+Keys (hand_codesign.core.run.signing): the optimizer gets the run's secret, each evaluator only
 its own Credential, through a variable of the environment the child inherits, never on a
 command line (any user can read command lines in `ps`; /proc/PID/environ only the same user
 and root, like a 0600 file, without a file to leave behind) and never in the bag folder. The
@@ -37,12 +37,12 @@ import time
 from hand_codesign.core.contract import EVALUATORS_READY
 from hand_codesign.core.contract import LIVE_READY
 from hand_codesign.core.contract import RECORDER_READY
-from hand_codesign.core.signing import CREDENTIAL_VARIABLE
-from hand_codesign.core.signing import SECRET_VARIABLE
-from hand_codesign.core.supervision import evaluator_role
-from hand_codesign.core.supervision import node_name
-from hand_codesign.core.supervision import RECORDER
-from hand_codesign.core.supervision import Supervisor
+from hand_codesign.core.run.signing import CREDENTIAL_VARIABLE
+from hand_codesign.core.run.signing import SECRET_VARIABLE
+from hand_codesign.core.run.supervision import evaluator_role
+from hand_codesign.core.run.supervision import node_name
+from hand_codesign.core.run.supervision import RECORDER
+from hand_codesign.core.run.supervision import Supervisor
 from hand_codesign.errors import UserError
 from hand_codesign.ros.discovery import start_profile
 from hand_codesign.ros.lifeline import runner_environment
@@ -83,7 +83,7 @@ class System:
         self.live = live
         self.live_view = None
         self.quiet = quiet
-        self.keys = keys  # core.signing.RunKeys, or None for an unsigned run
+        self.keys = keys  # core.run.signing.RunKeys, or None for an unsigned run
         inherited = {name: value for name, value in os.environ.items()
                      if name not in (SECRET_VARIABLE, CREDENTIAL_VARIABLE)}
         self.environment = dict(

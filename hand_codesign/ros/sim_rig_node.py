@@ -2,7 +2,7 @@
 The simulated rig node: runs requested trials in PyBullet as a test rig would run them.
 
 It hears the runs (RunInfo) and candidates, and for each TrialRequest builds the candidate's
-hand from its physical fields with core.sim_rig, answers on rig/trial_status (started, start
+hand from its physical fields with core.rig.simulated, answers on rig/trial_status (started, start
 collision or failed, then ended) and publishes the object's pose as geometry_msgs/PoseStamped
 on rig/object_pose, stamped with the trial's time from its start (frame `frame_id`), at the
 sample rate and with the noise and latency of its parameters.
@@ -14,7 +14,7 @@ import time
 
 from geometry_msgs.msg import PoseStamped
 from hand_codesign.core import contract
-from hand_codesign.core.sim_rig import requested_trial, SampleClock, SimulatedRig
+from hand_codesign.core.rig.simulated import requested_trial, SampleClock, SimulatedRig
 from hand_codesign.ros import topics
 from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only

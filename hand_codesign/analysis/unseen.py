@@ -1,0 +1,127 @@
+"""
+`analyze BAG --unseen N`: a run's best design on N worlds it never trained on.
+
+The same measures as a reproduce campaign's (analysis.campaign, core.experiments.measures),
+for one bag: the share of worlds within each tolerance of the task's goals, the median and
+90th percentile of the error, whether the design found its joint limits, and where in each
+randomized quantity's range it fails (bands of equal width).
+"""
+
+import dataclasses
+
+from hand_codesign.analysis.campaign import error_text, final_design, percent
+from hand_codesign.core.experiments.catalog import (ALONG_X_5MM, ALONG_Y_5MM, ORIENTATION_01,
+                                                    PLANE_5MM, POSE, POSITION_5MM)
+from hand_codesign.core.experiments.measures import (measure_worlds, shares_in_bands, summarize,
+                                                     unseen_world_states)
+from hand_codesign.core.experiments.robustness import world_values
+from hand_codesign.core.sim.worlds import QUANTITIES
+import numpy as np
+
+BANDS = 3  # bands of each randomized quantity's range in `analyze --unseen`
+
+
+def unseen_tolerances(task):
+    """
+    Return the Tolerances that `analyze --unseen` reports for a task, those of reproduce.
+
+    Only the errors of the goals the task has: without a position goal the box's distance
+    from its start would read as an error ("final position irrelevant", Task 6).
+    """
+    position = (PLANE_5MM, POSITION_5MM, ALONG_X_5MM, ALONG_Y_5MM) if task.goals.position else ()
+    orientation = (ORIENTATION_01,) if task.goals.orientation else ()
+    pose = (POSE,) if position and orientation else ()
+    return position + orientation + pose
+
+
+def scored_tolerance(task):
+    """
+    Return the Tolerance of the error the task's goals score, for its bands by world.
+
+    The last position goal's: along x or y when it measures one axis of the plane (the Task
+    5 presets), else in the plane; without a position goal the orientation's.
+    """
+    if not task.goals.position:
+        return ORIENTATION_01
+    axes = set(task.goals.position[-1].axes) - {'z'}
+    return {frozenset('x'): ALONG_X_5MM, frozenset('y'): ALONG_Y_5MM}.get(frozenset(axes),
+                                                                          PLANE_5MM)
+
+
+def world_bands(task, worlds, measures, tolerance, bands=BANDS):
+    """
+    Return {quantity: [(low, high, worlds, share within)]} over each randomized quantity.
+
+    The range of each quantity the task randomizes is cut into `bands` of equal width: the
+    shares tell where in that range the design fails (Task 6: the smallest boxes).
+    """
+    within = measures.errors[tolerance.kind] < tolerance.limit
+    values = np.array([world_values(world) for world in worlds]).reshape(len(worlds), -1)
+    return {name: shares_in_bands(values[:, QUANTITIES.index(name)], within,
+                                  np.linspace(bounds.lower, bounds.upper, bands + 1))
+            for name, bounds in task.randomization.quantities() if bounds.width > 0}
+
+
+def band_lines(bands, tolerance):
+    """Return the Markdown table of world_bands' shares, a row per quantity."""
+    count = max((len(row) for row in bands.values()), default=0)
+    lines = [f'Share of the worlds with {tolerance.describe()}, by where each randomized '
+             f'quantity fell in its range ({count} bands of equal width, SI units; worlds in '
+             'brackets):', '',
+             '| quantity | ' + ' | '.join(f'band {index + 1}' for index in range(count)) + ' |',
+             '|---|' + '---|' * count]
+    for name, row in bands.items():
+        lines.append(f'| {name} | ' + ' | '.join(
+            f'[{low:.3g}, {high:.3g}]: {percent(share) if worlds else "-"} ({worlds})'
+            for low, high, worlds, share in row) + ' |')
+    return lines
+
+
+def unseen_report(bag, count, processes=1, engine=None):
+    """
+    Return (Markdown lines, JSON record) of a run's best design on `count` unseen worlds.
+
+    `engine` ('pybullet' or 'mujoco') measures it in that physics engine instead of the run's
+    (a design's transfer to the other engine).
+
+    The same measures as a reproduce campaign's: for each error of the task's goals
+    (unseen_tolerances) the share of worlds within 5 mm or 0.1 rad, its median and p90, and
+    whether the design found its joint limits (core.experiments.measures) on the error its goals
+    score.
+    """
+    task, x, structure = final_design(bag)
+    found_in = task.physics.engine
+    if engine:
+        task = task.replace(physics=dataclasses.replace(task.physics, engine=engine))
+    worlds = unseen_world_states(task, count)
+    measures = measure_worlds(x, task, worlds, processes)
+    summaries = [summarize(measures, tolerance) for tolerance in unseen_tolerances(task)]
+    lines = [f'## On {count} unseen worlds', '',
+             f'The best design (structure {list(structure)}) on {count} worlds drawn from '
+             f'another stream of seed {task.seed} than the training worlds, simulated with '
+             f'{task.physics.engine} (the run used {found_in}).', '',
+             '| error | within | median | p90 | median at the start |', '|---|---|---|---|---|']
+    for summary in summaries:
+        tolerance = summary.tolerance
+        lines.append(f'| {tolerance.describe()} | {percent(summary.within)} | '
+                     f'{error_text(summary.median, tolerance)} | '
+                     f'{error_text(summary.p90, tolerance)} | '
+                     f'{error_text(summary.initial_median, tolerance)} |')
+    first = summaries[0]
+    scored = scored_tolerance(task)
+    judged = summarize(measures, scored)
+    lines += ['', f'Within {scored.describe()} while resting on a joint limit it reached, '
+                  f'touching the object: {percent(judged.limit_success_share)} of the worlds, '
+                  f'{percent(judged.limit_share_of_successes)} of those within; joint limits '
+                  f'found (at least half of those within and a quarter of all): '
+                  f'{"yes" if judged.joint_limits_found else "no"}. Resting on a joint limit '
+                  f'while touching, whatever the outcome: {percent(first.limit_contact_share)} '
+                  f'of the worlds. Start collisions: {percent(first.collision_share)} of the '
+                  'worlds. Every world runs the whole motion, with no early termination.', '']
+    bands = world_bands(task, worlds, measures, scored)
+    lines += band_lines(bands, scored)
+    record = {'bag': str(bag), 'seed': task.seed, 'unseen_worlds': count,
+              'engine': task.physics.engine, 'run_engine': found_in,
+              'summaries': [summary.as_dict() for summary in summaries],
+              'bands': {'tolerance': dataclasses.asdict(scored), 'quantities': bands}}
+    return lines, record
