@@ -452,6 +452,7 @@ node = rclpy.create_node('shell_listener')
 heard = []
 name = topics.GENERATION_SUMMARY
 node.create_subscription(topics.MESSAGE_TYPES[name], name, heard.append, topics.QOS[name])
+print('ready', flush=True)
 end = time.monotonic() + 120
 while not heard and time.monotonic() < end:
     rclpy.spin_once(node, timeout_sec=0.1)
@@ -465,6 +466,7 @@ def test_run_joins_the_ros_domain_of_the_users_shell(tmp_path):
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
         listener = subprocess.Popen([sys.executable, '-c', LISTENER], env=env,
                                     stdout=subprocess.PIPE, text=True)
+        listener.stdout.readline()   # subscribed before the run starts: no summary is missed
         command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
                    '--evaluators', '1', '--bag', str(tmp_path / str(attempt)), *BUDGET]
         run = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True,
