@@ -30,11 +30,8 @@ class DesignReader(ValueReader):
 
     def design(self, value, key):
         section = self.mapping(value, key, required=('friction', 'fingers', 'controller'))
-        fingers_key = join_key(key, 'fingers')
-        if not isinstance(section['fingers'], list) or not section['fingers']:
-            self.fail(fingers_key, 'a non-empty list of fingers', section['fingers'])
-        fingers = tuple(self.finger(item, f'{fingers_key}[{index}]')
-                        for index, item in enumerate(section['fingers']))
+        fingers = self.items(section['fingers'], join_key(key, 'fingers'), 'fingers',
+                             self.finger)
         hand = HandDesign(fingers=fingers, friction=self.number(
             section['friction'], join_key(key, 'friction'), minimum=0))
         controller = self.controller(section['controller'], join_key(key, 'controller'),
@@ -43,11 +40,7 @@ class DesignReader(ValueReader):
 
     def finger(self, value, key):
         section = self.mapping(value, key, required=('position', 'segment_lengths', 'joints'))
-        joints_key = join_key(key, 'joints')
-        if not isinstance(section['joints'], list) or not section['joints']:
-            self.fail(joints_key, 'a non-empty list of joints', section['joints'])
-        joints = tuple(self.joint(item, f'{joints_key}[{index}]')
-                       for index, item in enumerate(section['joints']))
+        joints = self.items(section['joints'], join_key(key, 'joints'), 'joints', self.joint)
         lengths = self.vector(section['segment_lengths'], join_key(key, 'segment_lengths'),
                               len(joints), positive=True)
         return FingerDesign(position=self.vector(section['position'], join_key(key, 'position'),

@@ -357,11 +357,8 @@ class _Reader(SettingsReader, DesignReader):
                                                               'kd'),
                                optional=('gravity_compensation',))
         times_key = join_key(key, 'keyframe_times')
-        times = section['keyframe_times']
-        if not isinstance(times, list) or not times:
-            self.fail(times_key, 'a non-empty list of times', times)
-        times = tuple(self.number(t, f'{times_key}[{i}]', positive=True)
-                      for i, t in enumerate(times))
+        times = self.items(section['keyframe_times'], times_key, 'times',
+                           lambda time, time_key: self.number(time, time_key, positive=True))
         if any(b <= a for a, b in zip(times, times[1:])):
             self.fail(times_key, 'strictly increasing times', section['keyframe_times'])
         return PolicySpec(

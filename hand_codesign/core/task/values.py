@@ -99,23 +99,26 @@ class ValueReader:
         if not isinstance(value, list) or len(value) != 4:
             self.fail(key, 'a quaternion [x, y, z, w] or {axis: [x, y, z], angle: rad}',
                       value)
-        quaternion = np.array(self.vector(value, key, 4))
-        norm = np.linalg.norm(quaternion)
-        if norm < 1e-9:
-            self.fail(key, 'a non-zero quaternion', value)
-        return tuple(float(v) for v in quaternion / norm)
+        return self._normalized(value, key, 4, 'quaternion')
 
     def unit_vector(self, value, key):
-        vector = np.array(self.vector(value, key, 3))
+        return self._normalized(value, key, 3, 'vector')
+
+    def _normalized(self, value, key, size, what):
+        vector = np.array(self.vector(value, key, size))
         norm = np.linalg.norm(vector)
         if norm < 1e-9:
-            self.fail(key, 'a non-zero vector', value)
+            self.fail(key, f'a non-zero {what}', value)
         return tuple(float(v) for v in vector / norm)
 
-    def structure(self, value, key):
+    def items(self, value, key, what, parse):
+        """Return parse(item, 'key[index]') for each item of a non-empty list of `what`."""
         if not isinstance(value, list) or not value:
-            self.fail(key, 'a non-empty list of joints per finger, e.g. [2, 2]', value)
-        return tuple(self.integer(item, f'{key}[{index}]') for index, item in enumerate(value))
+            self.fail(key, f'a non-empty list of {what}', value)
+        return tuple(parse(item, f'{key}[{index}]') for index, item in enumerate(value))
+
+    def structure(self, value, key):
+        return self.items(value, key, 'joints per finger, e.g. [2, 2]', self.integer)
 
     # ---- sections
 
