@@ -9,7 +9,8 @@ from hand_codesign.core.evaluate import evaluate_design, UNSTABLE_PENALTY
 from hand_codesign.core.sim.hand import hand_model
 from hand_codesign.core.sim.objectives import COLLISION_PENALTY, goal_schedule
 from hand_codesign.core.sim.policies import make_policy
-from hand_codesign.core.sim.pybullet_sim import EventPlan, object_shape
+from hand_codesign.core.sim.events import EventPlan
+from hand_codesign.core.sim.pybullet_sim import object_shape
 from hand_codesign.core.sim.worlds import object_state, ObjectState
 import numpy as np
 import pytest

@@ -44,8 +44,8 @@ from hand_codesign.core.search.hierarchy import grown_choices
 from hand_codesign.core.search.hierarchy import GROWN_FROM
 from hand_codesign.core.search.hierarchy import grows_fingers
 from hand_codesign.core.search.hierarchy import REPEATS
+from hand_codesign.core.sim.events import EventPlan
 from hand_codesign.core.sim.objectives import goal_schedule
-from hand_codesign.core.sim.pybullet_sim import EventPlan
 from hand_codesign.core.sim.worlds import object_state, QUANTITIES, world_states
 from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.core.task.parts import QD_ALGORITHMS

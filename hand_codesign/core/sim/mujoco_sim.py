@@ -1,11 +1,12 @@
 """
-The MuJoCo world of a candidate: the second physics engine, beside core/sim.py (PyBullet).
+The MuJoCo world of a candidate: the second physics engine, beside
+core/sim/pybullet_sim.py (PyBullet).
 
-Same interface and semantics as core.sim.Simulator (`build`, `object_shape`,
-`start_collisions`, `rollout` returning a core.sim.Rollout, the same EventPlan of checks,
+Same interface and semantics as core.sim.pybullet_sim.Simulator (`build`, `object_shape`,
+`start_collisions`, `rollout` returning a core.sim.events.Rollout, the same EventPlan of checks,
 watches and frames), so core.evaluate runs either engine from the task's
 `physics: {engine: mujoco}`. The model is built in code with mujoco.MjSpec from the very
-HandModel table that core.hand builds in PyBullet: a ground plane, the palm welded to the world
+HandModel table that core.sim.hand builds in PyBullet: a ground plane, the palm welded to the world
 at the hand's base pose, one body per segment with its hinge, capsule, mass and inertia (about
 its centre, link axes, given explicitly), and one free object body whose shape, size, mass,
 inertia, friction and pose are written into the candidate's compiled model for each world
@@ -39,11 +40,12 @@ Settings chosen to match Bullet on this model (one place; measured in test_mujoc
 - Integrator: MuJoCo's semi-implicit Euler, as Bullet's. Not modelled: Bullet's default
   multibody damping (0.04 of the link velocity), small at these speeds.
 
-The rollout loop is core.sim's, with one difference: an open-loop torque policy's torques are
-known in advance, so MuJoCo steps in C (mj_step's nstep) from one torque change or event to
-the next, with no Python per step (test_mujoco_sim checks it is bit for bit the single steps).
+The rollout loop is PyBullet's (core.sim.events.play), with one difference in how the steps
+between its events are taken: an open-loop torque policy's torques are known in advance, so
+MuJoCo steps in C (mj_step's nstep) from one torque change or event to the next, with no
+Python per step (test_mujoco_sim checks it is bit for bit the single steps).
 
-Unstable simulation: besides the object and joint checks of core.sim, MuJoCo resets a
+Unstable simulation: besides the object and joint checks of PyBullet's simulator, MuJoCo resets a
 diverging state by itself and counts a warning; a rollout with such a warning is unstable.
 """
 
@@ -51,12 +53,12 @@ import math
 from typing import Callable, Optional
 
 from hand_codesign.core.outcomes import CONTACT_DISTANCE
+from hand_codesign.core.sim.events import (EventPlans, EXPLOSION_JOINT_SPEED, object_intact,
+                                          play)
 from hand_codesign.core.sim.hand import HandModel
 from hand_codesign.core.sim.policies import TorquePolicy
-from hand_codesign.core.sim.pybullet_sim import (_FRAME, _JOINT_WATCH, _RECORD,
-                                                 COLLISION_TOLERANCE, EXPLOSION_DISTANCE,
-                                                 EXPLOSION_JOINT_SPEED, GRAVITY, GROUND_FRICTION,
-                                                 Rollout, Simulator)
+from hand_codesign.core.sim.pybullet_sim import (COLLISION_TOLERANCE, GRAVITY,
+                                                 GROUND_FRICTION)
 import mujoco
 import numpy as np
 
@@ -235,7 +237,7 @@ def model_mjcf(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
     return spec.to_xml()
 
 
-class MujocoSimulator:
+class MujocoSimulator(EventPlans):
     """A compiled MuJoCo model of one candidate, its data and the rollout loop."""
 
     engine = 'mujoco'
@@ -249,7 +251,7 @@ class MujocoSimulator:
         self.mj_model = self.mj_data = None
         self._data_sizes = self._scratch = None  # the sizes of the model mj_data was made for
         self.object_body = None  # not None while a world's object is in the scene
-        self._plans = {}
+        EventPlans.__init__(self)
 
     def close(self):
         """Drop the compiled model."""
@@ -388,14 +390,12 @@ class MujocoSimulator:
 
     # ---------------------------------------------------------------- rollout
 
-    # the same cache of event plans as PyBullet's simulator (self._plans)
-    plan = Simulator.plan
-
     def rollout(self, state, shape, policy, schedule,
                 on_frame: Optional[Callable] = None, frame_every=1,
                 on_end: Optional[Callable] = None):
         """
-        Run one world from its start: return a core.sim.Rollout (see core.sim.Simulator).
+        Run one world from its start: return a core.sim.events.Rollout (see
+        core.sim.pybullet_sim.Simulator.rollout).
 
         `on_frame(step, simulator)` and `on_end(simulator, rollout)` as in core.sim; here
         the simulator's `mj_model` and `mj_data` hold the scene.
@@ -440,51 +440,21 @@ class MujocoSimulator:
         m, d = self.mj_model, self.mj_data
         if self._scratch is None and not isinstance(policy, TorquePolicy):
             self._scratch = mujoco.MjData(m)
-        num_steps = plan.num_steps
-        torques = mujoco_torques(policy, m, d, num_steps, self._scratch)
-        until = self._holds(policy, num_steps)
+        torques = mujoco_torques(policy, m, d, plan.num_steps, self._scratch)
+        until = self._holds(policy, plan.num_steps)
         joints = self._joints
         applied = d.qfrc_applied
         step_many = mujoco.mj_step
-        event_steps, event_kinds = plan.steps, plan.kinds
-        event = 0
-        next_event = event_steps[0]
-        start = state.position
-        last_pose = (tuple(state.position), tuple(state.orientation))
-        unstable = False
-        steps = done = 0
-        if on_frame is not None:
-            on_frame(0, self)
-        while done < num_steps:
-            applied[:joints] = torques(done)
-            stop = min(until(done), next_event if next_event > 0 else num_steps)
-            step_many(m, d, stop - done)
-            done = stop
-            if done != next_event:
-                continue
-            steps = done
-            kind = event_kinds[event]
-            position, orientation = self.object_pose()
-            if not self._stable(position, orientation, start, kind & _JOINT_WATCH):
-                unstable = True
-                break
-            last_pose = (position, orientation)
-            if kind & _FRAME:
-                on_frame(done, self)
-            if kind & _RECORD and trace.record(position, orientation):
-                break
-            event += 1
-            next_event = event_steps[event]
-        else:
-            steps = num_steps
-            position, orientation = self.object_pose()
-            if self._stable(position, orientation, start, True):
-                last_pose = (position, orientation)
-            else:
-                unstable = True
-        return Rollout(trace=trace, steps=steps, unstable=unstable,
-                       final_position=tuple(last_pose[0]),
-                       final_orientation=tuple(last_pose[1]))
+
+        def advance(done, stop):
+            while done < stop:
+                applied[:joints] = torques(done)
+                held = min(until(done), stop)
+                step_many(m, d, held - done)
+                done = held
+
+        return play(plan, trace, state, advance, self.object_pose, self._stable,
+                    on_frame, self)
 
     def _stable(self, position, orientation, start, check_joints):
         """Return False for a diverged, non-finite or exploded object or (if asked) hand."""
@@ -492,10 +462,7 @@ class MujocoSimulator:
         counts = d.warning.number
         if any(counts[kind] for kind in _DIVERGENCE_WARNINGS):
             return False
-        x, y, z = position
-        if not (math.isfinite(x + y + z + sum(orientation))
-                and (x - start[0]) ** 2 + (y - start[1]) ** 2 + (z - start[2]) ** 2
-                < EXPLOSION_DISTANCE ** 2):
+        if not object_intact(position, orientation, start):
             return False
         if check_joints:
             joints = self._joints

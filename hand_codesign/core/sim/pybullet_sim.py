@@ -31,17 +31,14 @@ calls per step (torques, step) cost about 2 us of 15 to 20. Stepping several wor
 one client would save only those calls, so a faster step needs fewer solver iterations or
 contact rows: the task's `physics` section (bench/bench_physics.py).
 
-The rollout loop applies the policy's torques to every joint in one TORQUE_CONTROL call each
-step (the default velocity motors are off) and does nothing else per step except compare the
-step counter with the next event. Events: the goal schedule's checks (object pose recorded;
-early termination, eq. 6; every check also watches the object's stability), a stability
-watch twice per simulated second (the object; the joints once a second and at the end: each
-watch costs about 0.1 % of the rollout), and frames for replay when a callback is given. The
-rollout ends at the last goal: nothing after it is scored.
+The rollout loop (core.sim.events.play, shared with MuJoCo) looks at the world at its
+events only; between them this engine applies the policy's torques to every joint in one
+TORQUE_CONTROL call each step (the default velocity motors are off) and steps.
 
 Unstable simulation: a non-finite or exploding state (object farther than EXPLOSION_DISTANCE
-from its start, a non-finite joint or one faster than EXPLOSION_JOINT_SPEED) ends the rollout
-with `Rollout.unstable` set; evaluate() charges every objective of that world UNSTABLE_PENALTY.
+from its start, a non-finite joint or one faster than EXPLOSION_JOINT_SPEED, both in
+core.sim.events) ends the rollout with `Rollout.unstable` set; evaluate() charges every
+objective of that world UNSTABLE_PENALTY.
 (Bullet itself caps joint speeds at 100 rad/s, btMultiBody's maximum coordinate velocity, so
 huge torques fling a finger but do not blow the joints up.)
 
@@ -50,10 +47,12 @@ Start collisions: `start_collisions(objects)` reports whether the hand touches i
 at the start, penetrating deeper than COLLISION_TOLERANCE.
 """
 
-from dataclasses import dataclass
+from functools import partial
 import math
 from typing import Callable, Optional
 
+from hand_codesign.core.sim.events import (EventPlans, EXPLOSION_JOINT_SPEED, object_intact,
+                                          play)
 from hand_codesign.core.sim.hand import build_hand, HandModel
 from hand_codesign.core.sim.quiet_pybullet import BulletClient, c_output_silenced, pybullet
 
@@ -62,24 +61,6 @@ GROUND_FRICTION = 1.0
 # The ground is a box with its top face at z = 0: faster to build than a GEOM_PLANE.
 GROUND_HALF_EXTENTS = (50.0, 50.0, 0.5)
 COLLISION_TOLERANCE = 1e-6  # m of penetration that counts as a start collision
-EXPLOSION_DISTANCE = 100.0  # m from the object's start: the simulation has exploded
-EXPLOSION_JOINT_SPEED = 1e5  # rad / s
-WATCHES_PER_SECOND = 2.0  # object stability watches per simulated second, besides the checks
-JOINT_WATCH_EVERY = 2  # joints are checked at every 2nd watch (once a second) and at the end
-
-_RECORD, _WATCH, _JOINT_WATCH, _FRAME = 1, 2, 4, 8
-
-
-@dataclass
-class Rollout:
-    """What one world's rollout produced."""
-
-    trace: object  # objectives.Trace: object poses at the goal checks
-    steps: int  # physics steps simulated
-    unstable: bool
-    final_position: tuple  # object pose at the end (last finite pose if unstable)
-    final_orientation: tuple
-
 
 def object_shape(client, state, shape):
     """Create the collision shape of an ObjectState of a `shape` object; return its id."""
@@ -108,31 +89,7 @@ class Client(BulletClient):
         return attribute
 
 
-class EventPlan:
-    """The steps at which the rollout loop looks at the world, merged and flagged."""
-
-    def __init__(self, schedule, time_step, frame_every=0):
-        # Nothing after the last goal is scored: the rollout ends there.
-        self.num_steps = (schedule.check_step_list[-1] if schedule.num_checks
-                          else schedule.num_steps)
-        events = {}
-        for step in schedule.check_step_list:
-            events[step] = events.get(step, 0) | _RECORD
-        watch = max(1, int(round(1.0 / (WATCHES_PER_SECOND * time_step))))
-        for step in range(watch, self.num_steps + 1, watch):
-            events[step] = events.get(step, 0) | _WATCH
-        for step in range(watch * JOINT_WATCH_EVERY, self.num_steps + 1,
-                          watch * JOINT_WATCH_EVERY):
-            events[step] |= _JOINT_WATCH
-        if frame_every:
-            for step in range(frame_every, self.num_steps + 1, frame_every):
-                events[step] = events.get(step, 0) | _FRAME
-        ordered = sorted(step for step in events if step <= self.num_steps)
-        self.steps = tuple(ordered) + (-1,)  # -1: no further event
-        self.kinds = tuple(events[step] for step in ordered) + (0,)
-
-
-class Simulator:
+class Simulator(EventPlans):
     """A PyBullet client with the scene of one candidate and the rollout loop."""
 
     engine = 'pybullet'
@@ -149,7 +106,7 @@ class Simulator:
         self.object_body = None
         self._joints = []
         self._initial_angles = []
-        self._plans = {}
+        EventPlans.__init__(self)
 
     def close(self):
         """Disconnect the physics client."""
@@ -261,17 +218,6 @@ class Simulator:
 
     # ---------------------------------------------------------------- rollout
 
-    def plan(self, schedule, frame_every=0):
-        """Return the EventPlan of a goal schedule (cached)."""
-        key = (schedule, frame_every)  # schedules compare by identity
-        plan = self._plans.get(key)
-        if plan is None:
-            plan = EventPlan(schedule, schedule.time_step, frame_every)
-            if len(self._plans) > 16:
-                self._plans.clear()
-            self._plans[key] = plan
-        return plan
-
     def rollout(self, state, shape, policy, schedule,
                 on_frame: Optional[Callable] = None, frame_every=1,
                 on_end: Optional[Callable] = None):
@@ -301,52 +247,20 @@ class Simulator:
         torques = policy.start(client, hand, plan.num_steps)
         set_torques = client.setJointMotorControlArray
         step_simulation = client.stepSimulation
-        object_pose = client.getBasePositionAndOrientation
         torque_control = pybullet.TORQUE_CONTROL
-        event_steps, event_kinds = plan.steps, plan.kinds
-        event = 0
-        next_event = event_steps[0]
-        start = state.position
-        last_pose = (tuple(state.position), tuple(state.orientation))
-        unstable = False
-        steps = 0
-        if on_frame is not None:
-            on_frame(0, self)
-        for step in range(1, plan.num_steps + 1):
-            set_torques(hand, joints, torque_control, forces=torques(step - 1))
-            step_simulation()
-            if step != next_event:
-                continue
-            steps = step
-            kind = event_kinds[event]
-            position, orientation = object_pose(body)
-            if not self._stable(position, orientation, start, kind & _JOINT_WATCH):
-                unstable = True
-                break
-            last_pose = (position, orientation)
-            if kind & _FRAME:
-                on_frame(step, self)
-            if kind & _RECORD and trace.record(position, orientation):
-                break
-            event += 1
-            next_event = event_steps[event]
-        else:
-            steps = plan.num_steps
-            position, orientation = object_pose(body)
-            if self._stable(position, orientation, start, True):
-                last_pose = (position, orientation)
-            else:
-                unstable = True
-        return Rollout(trace=trace, steps=steps, unstable=unstable,
-                       final_position=tuple(last_pose[0]),
-                       final_orientation=tuple(last_pose[1]))
+
+        def advance(done, stop):
+            for step in range(done, stop):
+                set_torques(hand, joints, torque_control, forces=torques(step))
+                step_simulation()
+
+        return play(plan, trace, state, advance,
+                    partial(client.getBasePositionAndOrientation, body), self._stable,
+                    on_frame, self)
 
     def _stable(self, position, orientation, start, check_joints):
         """Return False for a non-finite or exploded object or (if asked) hand."""
-        x, y, z = position
-        if not (math.isfinite(x + y + z + sum(orientation))
-                and (x - start[0]) ** 2 + (y - start[1]) ** 2 + (z - start[2]) ** 2
-                < EXPLOSION_DISTANCE ** 2):
+        if not object_intact(position, orientation, start):
             return False
         if check_joints:
             for angle, speed, _, _ in self.client.getJointStates(self.hand, self._joints):
