@@ -535,7 +535,10 @@ def _symmetry_turns(symmetry):
 
 def _nearest_turn(orientation, turns, target):
     """Return the orientation * turn (of `turns`) at the smallest eq. (4) angle to target."""
-    candidates = np.array(quaternion_multiply(orientation, np.asarray(turns).T)).T
+    # a product per turn in Python floats: numpy's cost per call outweighs four components'
+    # arithmetic, and the operations (so the bits) are those of the product over arrays
+    candidates = np.array([quaternion_multiply(orientation, turn)
+                           for turn in np.asarray(turns).tolist()])
     inner = candidates @ np.asarray(target, dtype=float)
     return candidates[int(np.argmax(np.abs(inner)))]
 
