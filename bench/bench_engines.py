@@ -13,8 +13,14 @@ Measures, in one run, per task:
   designs drawn uniformly from the genome space (so both verdicts occur), one world each
   (target: agree in >= 99 %).
 
+--bags BAG ...: instead, the speed ratio on the candidates recorded in each run's bag (its
+task as run, e.g. Table I's 64 worlds): --speed-sample of them, spread evenly over the run.
+A ratio on 8 worlds weighs the per-candidate build (a Bullet hand costs milliseconds, a
+MuJoCo compile about 1.5 ms) eight times as much as one on 64.
+
 Usage: python bench/bench_engines.py [--designs 200] [--generations 25] [--popsize 16]
        [--world-states 8] [--speed-sample 12] [--rounds 3] [--collision-pairs 1000]
+       python bench/bench_engines.py --bags BAG [BAG ...] [--speed-sample 12] [--rounds 3]
 """
 
 import argparse
@@ -23,6 +29,7 @@ import os
 import time
 
 from bench_physics import searched_designs, spearman
+from hand_codesign.analysis.records import open_run, recorded_design, run_task_of
 from hand_codesign.core.evaluate import evaluate, shared_simulator
 from hand_codesign.core.sim.hand import hand_model
 from hand_codesign.core.sim.worlds import object_state, world_states
@@ -101,6 +108,23 @@ def bench_task(name, arguments):
           f'({agree / pairs * 100:.1f} %; {colliding} collide on PyBullet)')
 
 
+def bench_bag(bag, arguments):
+    """Print the speed ratio on candidates recorded in a run's bag, on its task as run."""
+    record = open_run(bag, warn=False)
+    reference = run_task_of(record)
+    ids = np.unique(np.asarray(record.candidates['candidate_id'], dtype=np.int64))
+    chosen = ids[np.linspace(0, len(ids) - 1, arguments.speed_sample).round().astype(int)]
+    genomes = [recorded_design(record, int(candidate)).x for candidate in chosen]
+    tasks = (on_engine(reference, 'pybullet'), on_engine(reference, 'mujoco'))
+    bullet_seconds, mujoco_seconds = speed_ratio(tasks, genomes, arguments.rounds)
+    worlds = len(genomes) * reference.num_world_states
+    print(f'{bag}: {len(genomes)} recorded candidates (ids {chosen[0]} to {chosen[-1]}), '
+          f'{reference.num_world_states} worlds each, ran on {reference.physics.engine}')
+    print(f'  evaluate() per core, MuJoCo over PyBullet: {bullet_seconds / mujoco_seconds:.2f} '
+          f'(PyBullet {bullet_seconds / worlds * 1e3:.2f} ms, MuJoCo '
+          f'{mujoco_seconds / worlds * 1e3:.2f} ms per world, best of {arguments.rounds})')
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument('--tasks', nargs='+', default=['task5', 'task6'])
@@ -111,8 +135,12 @@ def main():
     parser.add_argument('--speed-sample', type=int, default=12)
     parser.add_argument('--rounds', type=int, default=3)
     parser.add_argument('--collision-pairs', type=int, default=1000)
+    parser.add_argument('--bags', nargs='+', default=[],
+                        help='measure the speed on the candidates recorded in these runs')
     arguments = parser.parse_args()
-    for name in arguments.tasks:
+    for bag in arguments.bags:
+        bench_bag(bag, arguments)
+    for name in [] if arguments.bags else arguments.tasks:
         bench_task(name, arguments)
 
 
