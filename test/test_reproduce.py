@@ -486,3 +486,5 @@ def test_seeds_are_a_count_a_range_or_a_list(capsys):
         assert cli.main(['reproduce', 'levers-task6', '--seeds', bad]) == 2
         error = capsys.readouterr().err.strip()
         assert error.count('\n') == 0 and '--seeds' in error and repr(bad) in error
+    assert cli.main(['reproduce', 'levers-task6', '--seeds', '9-1']) == 2
+    assert 'a range runs upwards: 1-9' in capsys.readouterr().err

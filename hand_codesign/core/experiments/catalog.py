@@ -332,16 +332,18 @@ def parse_seeds(text):
     """
     text = str(text).strip()
     expected = f'--seeds: expected N (seeds 1 to N), A-B or A,B,...; got {text!r}'
-    try:
-        if re.fullmatch(r'\d+', text):
-            seeds = tuple(range(1, int(text) + 1))
-        elif re.fullmatch(r'\d+-\d+', text):
-            first, last = (int(part) for part in text.split('-'))
-            seeds = tuple(range(first, last + 1))
-        else:
+    if re.fullmatch(r'\d+', text):
+        seeds = tuple(range(1, int(text) + 1))
+    elif re.fullmatch(r'\d+-\d+', text):
+        first, last = (int(part) for part in text.split('-'))
+        if last < first:
+            raise ValueError(f'{expected} (a range runs upwards: {last}-{first})')
+        seeds = tuple(range(first, last + 1))
+    else:
+        try:
             seeds = tuple(int(part) for part in text.split(','))
-    except ValueError:
-        raise ValueError(expected) from None
+        except ValueError:
+            raise ValueError(expected) from None
     if not seeds or min(seeds) < 1:
         raise ValueError(expected + ' (seeds are 1 or more)')
     return tuple(dict.fromkeys(seeds))
