@@ -16,7 +16,9 @@ Measures, in one run, per task:
 --bags BAG ...: instead, the speed ratio on the candidates recorded in each run's bag (its
 task as run, e.g. Table I's 64 worlds): --speed-sample of them, spread evenly over the run.
 A ratio on 8 worlds weighs the per-candidate build (a Bullet hand costs milliseconds, a
-MuJoCo compile about 1.5 ms) eight times as much as one on 64.
+MuJoCo compile about 1.5 ms) eight times as much as one on 64. Then the same candidates in
+two processes at once, per engine (wall seconds of the slower): a run's two evaluators share
+the machine's two cores, its caches and memory, and an engine may suffer more from that.
 
 Usage: python bench/bench_engines.py [--designs 200] [--generations 25] [--popsize 16]
        [--world-states 8] [--speed-sample 12] [--rounds 3] [--collision-pairs 1000]
@@ -24,7 +26,9 @@ Usage: python bench/bench_engines.py [--designs 200] [--generations 25] [--popsi
 """
 
 import argparse
+import concurrent.futures
 import dataclasses
+import multiprocessing
 import os
 import time
 
@@ -123,6 +127,27 @@ def bench_bag(bag, arguments):
     print(f'  evaluate() per core, MuJoCo over PyBullet: {bullet_seconds / mujoco_seconds:.2f} '
           f'(PyBullet {bullet_seconds / worlds * 1e3:.2f} ms, MuJoCo '
           f'{mujoco_seconds / worlds * 1e3:.2f} ms per world, best of {arguments.rounds})')
+    pair = [two_at_once(task, genomes, arguments.rounds) for task in tasks]
+    print(f'  two processes at once, MuJoCo over PyBullet: {pair[0] / pair[1]:.2f} (PyBullet '
+          f'{pair[0] / worlds * 1e3:.2f} ms, MuJoCo {pair[1] / worlds * 1e3:.2f} ms per world '
+          'and process, wall time)')
+
+
+def wall_seconds(task, genomes):
+    """Return the wall seconds of evaluate() over the genomes (after one to warm up)."""
+    evaluate(genomes[0], task)
+    start = time.perf_counter()
+    for x in genomes:
+        evaluate(x, task)
+    return time.perf_counter() - start
+
+
+def two_at_once(task, genomes, rounds):
+    """Return the wall seconds of two processes evaluating the genomes at once, best round."""
+    spawn = multiprocessing.get_context('spawn')
+    with concurrent.futures.ProcessPoolExecutor(2, mp_context=spawn) as pool:
+        return min(max(pool.map(wall_seconds, [task] * 2, [genomes] * 2))
+                   for _ in range(rounds))
 
 
 def main():
