@@ -17,8 +17,8 @@ in how they step.
 from dataclasses import dataclass
 import math
 
-EXPLOSION_DISTANCE = 100.0  # m from the object's start: the simulation has exploded
-EXPLOSION_JOINT_SPEED = 1e5  # rad / s
+from hand_codesign.core.sim.scene import EXPLOSION_DISTANCE
+
 WATCHES_PER_SECOND = 2.0  # object stability watches per simulated second, besides the checks
 JOINT_WATCH_EVERY = 2  # joints are checked at every 2nd watch (once a second) and at the end
 

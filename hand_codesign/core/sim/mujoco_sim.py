@@ -56,12 +56,11 @@ import math
 from typing import Callable, Optional
 
 from hand_codesign.core.outcomes import CONTACT_DISTANCE
-from hand_codesign.core.sim.events import (EventPlans, EXPLOSION_JOINT_SPEED, object_intact,
-                                          play)
+from hand_codesign.core.sim.events import EventPlans, object_intact, play
 from hand_codesign.core.sim.hand import HandModel
 from hand_codesign.core.sim.policies import TorquePolicy
-from hand_codesign.core.sim.pybullet_sim import (COLLISION_TOLERANCE, GRAVITY,
-                                                 GROUND_FRICTION)
+from hand_codesign.core.sim.scene import (COLLISION_TOLERANCE, EXPLOSION_JOINT_SPEED, GRAVITY,
+                                          GROUND_FRICTION)
 import mujoco
 import numpy as np
 

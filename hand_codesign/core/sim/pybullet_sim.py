@@ -37,7 +37,7 @@ TORQUE_CONTROL call each step (the default velocity motors are off) and steps.
 
 Unstable simulation: a non-finite or exploding state (object farther than EXPLOSION_DISTANCE
 from its start, a non-finite joint or one faster than EXPLOSION_JOINT_SPEED, both in
-core.sim.events) ends the rollout with `Rollout.unstable` set; evaluate() charges every
+core.sim.scene) ends the rollout with `Rollout.unstable` set; evaluate() charges every
 objective of that world UNSTABLE_PENALTY.
 (Bullet itself caps joint speeds at 100 rad/s, btMultiBody's maximum coordinate velocity, so
 huge torques fling a finger but do not blow the joints up.)
@@ -51,16 +51,15 @@ from functools import partial
 import math
 from typing import Callable, Optional
 
-from hand_codesign.core.sim.events import (EventPlans, EXPLOSION_JOINT_SPEED, object_intact,
-                                          play)
+from hand_codesign.core.sim.events import EventPlans, object_intact, play
 from hand_codesign.core.sim.hand import build_hand, HandModel
 from hand_codesign.core.sim.quiet_pybullet import BulletClient, c_output_silenced, pybullet
+from hand_codesign.core.sim.scene import (COLLISION_TOLERANCE, EXPLOSION_JOINT_SPEED, GRAVITY,
+                                          GROUND_FRICTION)
 
-GRAVITY = -9.81  # m / s^2 along world z
-GROUND_FRICTION = 1.0
 # The ground is a box with its top face at z = 0: faster to build than a GEOM_PLANE.
 GROUND_HALF_EXTENTS = (50.0, 50.0, 0.5)
-COLLISION_TOLERANCE = 1e-6  # m of penetration that counts as a start collision
+
 
 def object_shape(client, state, shape):
     """Create the collision shape of an ObjectState of a `shape` object; return its id."""
