@@ -195,12 +195,12 @@ def write_tables(arguments, rows, bullet_overshoot):
         f'`python bench/bench_engine_softness.py --scales {scales} --cones {cones} '
         f'--designs {arguments.designs} --generations {arguments.generations} --popsize '
         f'{arguments.popsize} --world-states {arguments.world_states} --out {arguments.out}`. '
-        'Scales multiply the time constant of MuJoCo\'s joint limits and contacts (1: the '
-        'shipped time constants); cone: MuJoCo\'s friction cone (shipped: elliptic, chosen on '
+        "Scales multiply the time constant of MuJoCo's joint limits and contacts (1: the "
+        "shipped time constants); cone: MuJoCo's friction cone (shipped: elliptic, chosen on "
         'this table). Spearman: rank correlation of the weighted sum over the designs of a '
         'seeded PyBullet CMA-ES search (target >= 0.85). Overshoot: how far a joint pushed '
         f'onto its limit passes it (target < 1 mrad; PyBullet {bullet_overshoot * 1e3:.3f} '
-        'mrad). Rest: the box\'s resting height against PyBullet\'s (target < 0.2 mm).', '',
+        "mrad). Rest: the box's resting height against PyBullet's (target < 0.2 mm).", '',
         'Per objective: the same correlation of each objective alone (Task 5: position_1, '
         'the box in the plane; orientation_1, its turn about the vertical).', '']
     per_objective = [key for key in rows[0] if key.count('_') >= 2 and key.startswith(

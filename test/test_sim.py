@@ -6,10 +6,10 @@ import pathlib
 from hand_codesign.core import genome_spec, load_task, Simulator, world_states
 from hand_codesign.core.design import ControllerDesign, FingerDesign, JointDesign
 from hand_codesign.core.evaluate import evaluate_design, UNSTABLE_PENALTY
+from hand_codesign.core.sim.events import EventPlan
 from hand_codesign.core.sim.hand import hand_model
 from hand_codesign.core.sim.objectives import COLLISION_PENALTY, goal_schedule
 from hand_codesign.core.sim.policies import make_policy
-from hand_codesign.core.sim.events import EventPlan
 from hand_codesign.core.sim.pybullet_sim import object_shape
 from hand_codesign.core.sim.worlds import object_state, ObjectState
 import numpy as np

@@ -1,6 +1,5 @@
 """
-The MuJoCo world of a candidate: the second physics engine, beside
-core/sim/pybullet_sim.py (PyBullet).
+The MuJoCo world of a candidate: the second physics engine, beside PyBullet's.
 
 Same interface and semantics as core.sim.pybullet_sim.Simulator (`build`, `object_shape`,
 `start_collisions`, `rollout` returning a core.sim.events.Rollout, the same EventPlan of checks,
@@ -397,11 +396,11 @@ class MujocoSimulator(EventPlans):
                 on_frame: Optional[Callable] = None, frame_every=1,
                 on_end: Optional[Callable] = None):
         """
-        Run one world from its start: return a core.sim.events.Rollout (see
-        core.sim.pybullet_sim.Simulator.rollout).
+        Run one world from its start: return a core.sim.events.Rollout.
 
-        `on_frame(step, simulator)` and `on_end(simulator, rollout)` as in core.sim; here
-        the simulator's `mj_model` and `mj_data` hold the scene.
+        `on_frame(step, simulator)` and `on_end(simulator, rollout)` as in PyBullet's
+        (core.sim.pybullet_sim.Simulator.rollout); here the simulator's `mj_model` and
+        `mj_data` hold the scene.
         """
         self.reset(state, shape)
         plan = self.plan(schedule, frame_every if on_frame is not None else 0)
