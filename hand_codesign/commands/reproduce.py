@@ -60,8 +60,8 @@ def reproduce_command(arguments):
     for item in campaigns:
         item.prepare()
         print(f'reproduce: {item.experiment.name}, budget {item.budget.describe()}; '
-              f'{catalog.seeds_text(item.seeds)}; {len(item.runs)} runs of '
-              f'{arguments.evaluators} evaluators; '
+              f'{catalog.seeds_text(item.seeds)}; {_count(len(item.runs), "run")} of '
+              f'{_count(arguments.evaluators, "evaluator")}; '
               f'folder {item.out}', flush=True)
     progress = Progress(sum(len(item.runs) for item in campaigns))
     for item in campaigns:
@@ -76,6 +76,11 @@ def reproduce_command(arguments):
               'are kept, the interrupted one resumes from its bag)', file=sys.stderr)
         return INTERRUPTED
     return 0
+
+
+def _count(number, noun):
+    """Return `number noun`, the noun plural unless the number is one ("1 run", "2 runs")."""
+    return f'{number} {noun}' if number == 1 else f'{number} {noun}s'
 
 
 def chosen_experiments(name):
