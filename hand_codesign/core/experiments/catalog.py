@@ -221,7 +221,8 @@ EXPERIMENTS = {
         'Task 5 (align a box on the plane, fixed 2x2 hand): CMA-ES and MO-CMA-ES on 8, 64 and '
         '128 worlds, torque and PD policies; joint limits found',
         _joint_limit_configurations('task5.yaml', 'task5', ('torque', 'pd')), PLANE_5MM,
-        _budgets((4, 8, 100, 1), (16, 16, 1000, 2), (100, 80, 1000, 5))),
+        _budgets((4, 8, 100, 1), (16, 16, 1000, 2), (100, 80, 1000, 5)),
+        also=(ALONG_X_5MM, ALONG_Y_5MM)),
     'task6-rotation': Experiment(
         'task6-rotation',
         'Task 6 (turn a box 45 degrees on the plane, fixed 2x2 hand): CMA-ES and MO-CMA-ES on '
