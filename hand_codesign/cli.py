@@ -46,6 +46,17 @@ def domain_id_option(text):
     return int(text)
 
 
+def seconds_option(text):
+    """Return a duration option's value: seconds, a number of at least 0."""
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = -1.0
+    if not seconds >= 0.0:
+        raise argparse.ArgumentTypeError(f'expected seconds (a number >= 0), got {text!r}')
+    return seconds
+
+
 def add_run_arguments(parser):
     parser.add_argument('--task', help='task file (YAML), e.g. config/tasks/task5.yaml')
     parser.add_argument('--evaluators', type=int, default=2,
@@ -63,6 +74,9 @@ def add_run_arguments(parser):
                         help="ROS_DOMAIN_ID of the run (default: the environment's, as ROS 2 "
                              'tools; 0 if unset); auto: a free one of this host')
     parser.add_argument('--quiet', action='store_true', help='print only the final summary')
+    parser.add_argument('--progress-every', type=seconds_option, metavar='SECONDS',
+                        help="with --quiet, still print a generation's progress line, at most "
+                             'one every SECONDS (reproduce: 300)')
     parser.add_argument('--discovery-server', type=int, nargs='?', const=DEFAULT_PORT,
                         metavar='PORT',
                         help='start a Fast DDS discovery server (UDP port, default '

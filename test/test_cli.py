@@ -8,6 +8,7 @@ import sys
 from hand_codesign import cli
 from hand_codesign.commands.run import run_domain
 from hand_codesign.errors import UserError
+from hand_codesign.ros.runner import ProgressThrottle
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -106,6 +107,22 @@ def test_a_bad_domain_id_is_one_line(capsys, value):
         cli.main(['run', '--task', TASK, '--domain-id', value])
     err = capsys.readouterr().err
     assert stop.value.code == 2 and f'expected "auto" or 0 to 232, got {value!r}' in err
+
+
+@pytest.mark.parametrize('value', ['soon', '-5', 'nan'])
+def test_a_bad_progress_interval_is_one_line(capsys, value):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(['run', '--task', TASK, '--quiet', '--progress-every', value])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2
+    assert f'--progress-every: expected seconds (a number >= 0), got {value!r}' in err
+
+
+def test_a_quiet_run_says_a_progress_line_at_most_once_an_interval():
+    throttle = ProgressThrottle(300.0)
+    said = [seconds for seconds in (0.0, 10.0, 299.0, 300.0, 400.0, 650.0, 1000.0)
+            if throttle.due(seconds)]
+    assert said == [0.0, 300.0, 650.0, 1000.0]
 
 
 def test_version_names_the_package_version():

@@ -327,6 +327,8 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
             first.kill()
     assert first.returncode == 130, output
     assert 'run 2 of 2' in output and 'run the same command again' in output
+    # its runs are quiet but for a progress line every few minutes: here the first alone
+    assert 'generation 1/20 [2x2]' in output and 'generation 2/20' not in output
     finished = runs / 'torque-cma-2w-seed1' / 'result.json'
     stamp = finished.stat().st_mtime_ns
     assert not (runs / 'torque-mocma-16w-seed1' / 'result.json').exists()

@@ -39,6 +39,7 @@ import numpy as np
 INTERRUPTED = 130
 RESUME_REFUSED = 2  # `run --resume` exit code of a bag it cannot resume (UserError)
 STOP_WAIT = 120.0  # s a run may take to close its bag after an interruption
+PROGRESS_EVERY = 300.0  # s between a run's progress lines: an hour's run says where it is
 
 
 def reproduce_command(arguments):
@@ -288,6 +289,7 @@ class Campaign:
         previous = campaign.attempts(self.runs_dir, key)
         bag = campaign.next_attempt(self.runs_dir, key)
         common = ['--bag', str(bag), '--evaluators', str(evaluators), '--quiet',
+                  '--progress-every', f'{PROGRESS_EVERY:g}',
                   '--domain-id', 'auto']   # campaigns side by side never share a domain
         if previous:
             code = self.call(['--resume', str(previous[-1])] + common)

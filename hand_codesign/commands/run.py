@@ -50,7 +50,8 @@ def run_command(arguments):
     with claimed_domain(requested_domain) as domain_id:
         live = None if arguments.live is None else (arguments.live_host, arguments.live)
         system = System(bag, domain_id, quiet=arguments.quiet, discovery=discovery,
-                        start_timeout=start_timeout(arguments), live=live, keys=keys)
+                        start_timeout=start_timeout(arguments), live=live, keys=keys,
+                        progress_every=arguments.progress_every)
         say = system.say
         for evaluator_id, path in key_files:
             write_key_file(path, keys.credential(evaluator_id).text())

@@ -39,6 +39,7 @@ from hand_codesign.core.contract import LIVE_READY
 from hand_codesign.core.contract import RECORDER_READY
 from hand_codesign.core.run.signing import CREDENTIAL_VARIABLE
 from hand_codesign.core.run.signing import SECRET_VARIABLE
+from hand_codesign.core.run.summary import PROGRESS_PREFIX
 from hand_codesign.core.run.supervision import evaluator_role
 from hand_codesign.core.run.supervision import node_name
 from hand_codesign.core.run.supervision import RECORDER
@@ -77,12 +78,18 @@ class System:
     """The processes of one run: recorder, evaluators and optimizer, kept alive while it runs."""
 
     def __init__(self, bag, domain_id, quiet=False, discovery=None, start_timeout=0.0,
-                 live=None, keys=None):
-        """live: None, or the (host, port) the live view serves Foxglove on."""
+                 live=None, keys=None, progress_every=None):
+        """
+        live: None, or the (host, port) the live view serves Foxglove on.
+
+        quiet: say nothing but what `run` prints itself; progress_every: with quiet, still
+        relay a generation's progress line, at most one every so many seconds (None: none).
+        """
         self.bag = bag
         self.live = live
         self.live_view = None
         self.quiet = quiet
+        self.progress = None if progress_every is None else ProgressThrottle(progress_every)
         self.keys = keys  # core.run.signing.RunKeys, or None for an unsigned run
         inherited = {name: value for name, value in os.environ.items()
                      if name not in (SECRET_VARIABLE, CREDENTIAL_VARIABLE)}
@@ -108,6 +115,11 @@ class System:
 
     def say(self, text):
         if not self.quiet:
+            print(text, flush=True)
+
+    def say_progress(self, text):
+        """Print a generation's progress line unless quiet, or quiet but one is due."""
+        if not self.quiet or (self.progress is not None and self.progress.due(time.monotonic())):
             print(text, flush=True)
 
     def node(self, module, parameters, key=None, remaps=(), **popen):
@@ -243,7 +255,11 @@ class System:
         for line in self.optimizer.stdout:
             if EVALUATORS_READY in line:
                 self.supervisor.optimizer_ready()
-            self.say(line.rstrip().replace('[INFO] [optimizer]: ', ''))
+            text = line.rstrip().replace('[INFO] [optimizer]: ', '')
+            if text.startswith(PROGRESS_PREFIX):
+                self.say_progress(text)
+            else:
+                self.say(text)
 
     def supervise(self):
         """Keep recorder and evaluators alive until the optimizer ends; return the run's code."""
@@ -286,6 +302,21 @@ class System:
         stop([self.recorder, self.live_view])
         if self.discovery is not None:
             self.discovery.stop()
+
+
+class ProgressThrottle:
+    """Whether a progress line is due: the first, then at most one every `interval` seconds."""
+
+    def __init__(self, interval):
+        self.interval = interval
+        self.last = None
+
+    def due(self, now):
+        """Return True (and count it said) when a line may be said at `now` (seconds)."""
+        if self.last is not None and now - self.last < self.interval:
+            return False
+        self.last = now
+        return True
 
 
 def stop(processes):

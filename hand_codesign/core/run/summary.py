@@ -2,6 +2,8 @@
 
 import numpy as np
 
+PROGRESS_PREFIX = 'generation '   # every progress_line starts so: a quiet run picks them out
+
 
 def generation_summary(generation, structure, names, told_ids, objectives, result,
                        evaluations, wall_time, check=False, horizon=0.0):
@@ -46,10 +48,10 @@ def progress_line(summary, iterations, rate, seconds_left):
     if summary.get('horizon'):
         structure += f', horizon {summary["horizon"]:g} s'
     stage = f' of stage {summary["stage"]}' if summary.get('stage') else ''
-    position = f'generation {summary["generation"] + 1}/{iterations}{stage}'
+    position = f'{PROGRESS_PREFIX}{summary["generation"] + 1}/{iterations}{stage}'
     if summary.get('restart') is not None:
         # with restarts (core.search.restarts) the budget is in evaluations, not generations
-        position = (f'generation {summary["generation"] + 1}{stage} (restart '
+        position = (f'{PROGRESS_PREFIX}{summary["generation"] + 1}{stage} (restart '
                     f'{summary["restart"]}, population {summary["population"]}; '
                     f'{summary["spent"]}/{summary["budget"]} evaluations)')
     return (f'{position} [{structure}] | '
