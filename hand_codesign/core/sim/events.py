@@ -17,7 +17,7 @@ in how they step.
 from dataclasses import dataclass
 import math
 
-from hand_codesign.core.sim.scene import EXPLOSION_DISTANCE
+from hand_codesign.core.sim.scene import EXPLOSION_DISTANCE, EXPLOSION_JOINT_SPEED
 
 WATCHES_PER_SECOND = 2.0  # object stability watches per simulated second, besides the checks
 JOINT_WATCH_EVERY = 2  # joints are checked at every 2nd watch (once a second) and at the end
@@ -131,3 +131,10 @@ def object_intact(position, orientation, start):
 def _ended(trace, steps, unstable, pose):
     return Rollout(trace=trace, steps=steps, unstable=unstable,
                    final_position=tuple(pose[0]), final_orientation=tuple(pose[1]))
+
+
+def joints_intact(angles, speeds):
+    """Return whether every joint angle (rad) is finite and every speed (rad/s) is sane."""
+    # in Python: numpy's calls cost more than a hand's few joints
+    return (all(map(math.isfinite, angles))
+            and all(abs(speed) < EXPLOSION_JOINT_SPEED for speed in speeds))

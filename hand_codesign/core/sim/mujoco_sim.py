@@ -55,11 +55,10 @@ import math
 from typing import Callable, Optional
 
 from hand_codesign.core.outcomes import CONTACT_DISTANCE
-from hand_codesign.core.sim.events import EventPlans, object_intact, play
+from hand_codesign.core.sim.events import EventPlans, joints_intact, object_intact, play
 from hand_codesign.core.sim.hand import HandModel
 from hand_codesign.core.sim.policies import TorquePolicy
-from hand_codesign.core.sim.scene import (COLLISION_TOLERANCE, EXPLOSION_JOINT_SPEED, GRAVITY,
-                                          GROUND_FRICTION)
+from hand_codesign.core.sim.scene import COLLISION_TOLERANCE, GRAVITY, GROUND_FRICTION
 import mujoco
 import numpy as np
 
@@ -468,11 +467,7 @@ class MujocoSimulator(EventPlans):
             return False
         if check_joints:
             joints = self._joints
-            # in Python: numpy's calls cost more than these few joints
-            if not (all(map(math.isfinite, d.qpos[:joints].tolist()))
-                    and all(abs(speed) < EXPLOSION_JOINT_SPEED
-                            for speed in d.qvel[:joints].tolist())):
-                return False
+            return joints_intact(d.qpos[:joints].tolist(), d.qvel[:joints].tolist())
         return True
 
     def link_poses(self):

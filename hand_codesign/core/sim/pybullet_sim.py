@@ -37,8 +37,9 @@ TORQUE_CONTROL call each step (the default velocity motors are off) and steps.
 
 Unstable simulation: a non-finite or exploding state (object farther than EXPLOSION_DISTANCE
 from its start, a non-finite joint or one faster than EXPLOSION_JOINT_SPEED, both in
-core.sim.scene) ends the rollout with `Rollout.unstable` set; evaluate() charges every
-objective of that world UNSTABLE_PENALTY.
+core.sim.scene; core.sim.events' object_intact and joints_intact check them, for both engines)
+ends the rollout with `Rollout.unstable` set; evaluate() charges every objective of that world
+UNSTABLE_PENALTY.
 (Bullet itself caps joint speeds at 100 rad/s, btMultiBody's maximum coordinate velocity, so
 huge torques fling a finger but do not blow the joints up.)
 
@@ -48,14 +49,12 @@ at the start, penetrating deeper than COLLISION_TOLERANCE.
 """
 
 from functools import partial
-import math
 from typing import Callable, Optional
 
-from hand_codesign.core.sim.events import EventPlans, object_intact, play
+from hand_codesign.core.sim.events import EventPlans, joints_intact, object_intact, play
 from hand_codesign.core.sim.hand import build_hand, HandModel
 from hand_codesign.core.sim.quiet_pybullet import BulletClient, c_output_silenced, pybullet
-from hand_codesign.core.sim.scene import (COLLISION_TOLERANCE, EXPLOSION_JOINT_SPEED, GRAVITY,
-                                          GROUND_FRICTION)
+from hand_codesign.core.sim.scene import COLLISION_TOLERANCE, GRAVITY, GROUND_FRICTION
 
 # The ground is a box with its top face at z = 0: faster to build than a GEOM_PLANE.
 GROUND_HALF_EXTENTS = (50.0, 50.0, 0.5)
@@ -262,7 +261,6 @@ class Simulator(EventPlans):
         if not object_intact(position, orientation, start):
             return False
         if check_joints:
-            for angle, speed, _, _ in self.client.getJointStates(self.hand, self._joints):
-                if not (math.isfinite(angle) and abs(speed) < EXPLOSION_JOINT_SPEED):
-                    return False
+            states = self.client.getJointStates(self.hand, self._joints)
+            return joints_intact([state[0] for state in states], [state[1] for state in states])
         return True
