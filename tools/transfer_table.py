@@ -66,6 +66,11 @@ def value_text(value, tolerance):
     return f'{value * 1000:.1f} mm'
 
 
+def runs_text(number):
+    """Return "1 run" or "N runs"."""
+    return '1 run' if number == 1 else f'{number} runs'
+
+
 def rows_of(runs):
     """Return the table's rows (dicts of COLUMNS), a run measured in both engines each."""
     rows = []
@@ -111,7 +116,7 @@ def markdown(rows, title, note):
         if group:
             home = sum(row['within_found'] for row in group) / len(group)
             away = sum(row['within_other'] for row in group) / len(group)
-            lines.append(f'| pooled, {len(group)} runs | {NAMES[engine]} | {home:.0%} | '
+            lines.append(f'| pooled, {runs_text(len(group))} | {NAMES[engine]} | {home:.0%} | '
                          f'{away:.0%} | | | | | |')
     tolerances = sorted({row['tolerance'] for row in rows})
     lines += ['', f"Within: the share of each run's {rows[0]['worlds']} unseen worlds that end "
@@ -142,7 +147,7 @@ def main():
         writer.writerows(rows)
     folder.with_suffix('.md').write_text(markdown(rows, arguments.title, arguments.note))
     print(f'wrote {folder.with_suffix(".csv")} and {folder.with_suffix(".md")} '
-          f'({len(rows)} runs)')
+          f'({runs_text(len(rows))})')
     return 0
 
 
