@@ -82,7 +82,7 @@ def add_run_arguments(parser):
                         help='start a Fast DDS discovery server (UDP port, default '
                              f'{DEFAULT_PORT}) for evaluators on hosts without multicast; '
                              'prints how they join')
-    parser.add_argument('--start-timeout', type=float, metavar='SECONDS',
+    parser.add_argument('--start-timeout', type=seconds_option, metavar='SECONDS',
                         help='seconds the evaluators have to join before the run gives up '
                              '(default 300 with --evaluators N > 0; 0: wait without limit, '
                              'the default with --evaluators 0)')

@@ -109,13 +109,14 @@ def test_a_bad_domain_id_is_one_line(capsys, value):
     assert stop.value.code == 2 and f'expected "auto" or 0 to 232, got {value!r}' in err
 
 
+@pytest.mark.parametrize('flag', ['--progress-every', '--start-timeout'])
 @pytest.mark.parametrize('value', ['soon', '-5', 'nan'])
-def test_a_bad_progress_interval_is_one_line(capsys, value):
+def test_a_bad_duration_is_one_line(capsys, flag, value):
     with pytest.raises(SystemExit) as stop:
-        cli.main(['run', '--task', TASK, '--quiet', '--progress-every', value])
+        cli.main(['run', '--task', TASK, '--quiet', flag, value])
     err = capsys.readouterr().err
     assert stop.value.code == 2
-    assert f'--progress-every: expected seconds (a number >= 0), got {value!r}' in err
+    assert f'{flag}: expected seconds (a number >= 0), got {value!r}' in err
 
 
 def test_a_quiet_run_says_a_progress_line_at_most_once_an_interval():

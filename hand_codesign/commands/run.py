@@ -203,9 +203,6 @@ def check_arguments(arguments):
         raise UserError('--task FILE is required (e.g. config/tasks/task5.yaml)')
     if arguments.evaluators < 0:
         raise UserError(f'--evaluators: expected 0 or more, got {arguments.evaluators}')
-    if arguments.start_timeout is not None and arguments.start_timeout < 0:
-        raise UserError(f'--start-timeout: expected 0 (no limit) or more seconds, got '
-                        f'{arguments.start_timeout}')
     if arguments.discovery_server is not None and not 0 < arguments.discovery_server < 65536:
         raise UserError(f'--discovery-server: expected a UDP port from 1 to 65535, got '
                         f'{arguments.discovery_server}')
