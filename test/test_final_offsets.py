@@ -1,14 +1,17 @@
 """tools/final_offsets.py: where a run's best design leaves the object, axis by axis."""
 
+import csv
 import pathlib
 import re
 import subprocess
 import sys
 
+from analysis_run import BUDGET
 from hand_codesign.analysis.campaign import final_design
 from hand_codesign.core.experiments.measures import (measure_worlds, summarize, Tolerance,
                                                      unseen_world_states)
 from hand_codesign.core.experiments.robustness import start_and_goal_poses
+from hand_codesign.core.sim.worlds import world_states
 import numpy as np
 
 TOOL = pathlib.Path(__file__).resolve().parents[1] / 'tools' / 'final_offsets.py'
@@ -30,3 +33,22 @@ def test_shares_along_each_axis_are_the_measures_of_reproduce(real_run):
     np.testing.assert_allclose(
         np.linalg.norm(measures.final_positions[:, :2] - goals[:, :2], axis=1),
         measures.errors['plane'], rtol=0, atol=1e-12)
+
+
+def test_training_worlds_are_the_runs_own_and_the_table_holds_both_sets(real_run, tmp_path):
+    out = tmp_path / 'offsets'
+    completed = subprocess.run(
+        [sys.executable, str(TOOL), str(real_run.bag), '--unseen', '10', '--training',
+         '--table', str(out)], capture_output=True, text=True, timeout=300)
+    assert completed.returncode == 0, completed.stderr
+    with out.with_suffix('.csv').open() as stream:
+        rows = list(csv.DictReader(stream))
+    trained = BUDGET[BUDGET.index('--world-states') + 1]
+    assert [(row['worlds'], row['count']) for row in rows] == [
+        ('training', trained), ('unseen', '10')]
+    task, x, _ = final_design(real_run.bag)
+    measures = measure_worlds(x, task, world_states(task))
+    for axis in ('plane', 'x', 'y'):
+        share = summarize(measures, Tolerance(axis, 0.005)).within
+        assert float(rows[0][f'within_{axis}']) == share
+    assert f'| training, {trained} |' in out.with_suffix('.md').read_text()

@@ -1,25 +1,34 @@
 """
 Where a run's best design leaves the object on the plane, against where the world put it.
 
-    python tools/final_offsets.py BAG [BAG ...] [--unseen 1000]
+    python tools/final_offsets.py BAG [BAG ...] [--unseen 1000] [--training] [--table OUT]
 
 Each bag's best design is simulated on N unseen worlds (core.experiments.measures, as `reproduce`
-and
-`analyze --unseen` measure it). Per axis of the plane, x and y of the world, it prints the
+and `analyze --unseen` measure it). Per axis of the plane, x and y of the world, it prints the
 share of worlds whose final offset from the last position goal is below 5 mm, and the
 least-squares slope and the correlation of the object's final position on the world's start
 offset along that axis. A slope near 1 with a high correlation says that the hand leaves the
 object where the world put it along that axis: a part of the error no design of that hand
 removes, since the hand cannot tell where the world put it.
+
+--training also simulates the design on the worlds its run trained on (core.sim.worlds, the
+run's seed and count), whole motions as the unseen ones: a share as low there as on unseen
+worlds says the design falls short on the very worlds it was optimized on, not by
+generalizing. --table OUT writes OUT.csv and OUT.md, a row per bag and set of worlds.
 """
 
 import argparse
+import csv
+import pathlib
 
 from hand_codesign.analysis.campaign import final_design
 from hand_codesign.core.experiments.measures import measure_worlds, unseen_world_states
+from hand_codesign.core.sim.worlds import world_states
 import numpy as np
 
 TOLERANCE = 0.005  # m
+COLUMNS = ['run', 'seed', 'worlds', 'count', 'within_plane', 'within_x', 'within_y',
+           'median_plane_mm', 'p90_plane_mm', 'slope_y', 'correlation_y']
 
 
 def axis_rows(measures, worlds):
@@ -35,21 +44,68 @@ def axis_rows(measures, worlds):
     return rows
 
 
+def table_row(bag, task, kind, measures, worlds):
+    """Return the table's row (dict of COLUMNS) of one design on one set of worlds."""
+    plane = measures.errors['plane']
+    _, _, slope_y, correlation_y = axis_rows(measures, worlds)[1]
+    return {'run': pathlib.Path(bag).name, 'seed': task.seed, 'worlds': kind,
+            'count': len(plane),
+            **{f'within_{axis}': float(np.mean(measures.errors[axis] < TOLERANCE))
+               for axis in ('plane', 'x', 'y')},
+            'median_plane_mm': 1000 * float(np.median(plane)),
+            'p90_plane_mm': 1000 * float(np.percentile(plane, 90)),
+            'slope_y': slope_y, 'correlation_y': correlation_y}
+
+
+def write_table(out, rows):
+    """Write OUT.csv and OUT.md of the rows."""
+    out = pathlib.Path(out)
+    with out.with_suffix('.csv').open('w', newline='') as stream:
+        writer = csv.DictWriter(stream, COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    lines = ['| run | seed | worlds | within 5 mm in the plane | along x | along y | median '
+             "(plane) | p90 (plane) | final y on the start's y: slope, correlation |",
+             '|---|---|---|---|---|---|---|---|---|']
+    lines += [f"| {row['run']} | {row['seed']} | {row['worlds']}, {row['count']} | "
+              f"{row['within_plane']:.0%} | {row['within_x']:.0%} | {row['within_y']:.0%} | "
+              f"{row['median_plane_mm']:.1f} mm | {row['p90_plane_mm']:.1f} mm | "
+              f"{row['slope_y']:.2f}, {row['correlation_y']:.2f} |"
+              for row in rows]
+    out.with_suffix('.md').write_text('\n'.join(lines) + '\n')
+    print(f'wrote {out.with_suffix(".csv")} and {out.with_suffix(".md")}')
+
+
+def report(bag, task, kind, measures, worlds):
+    """Print the shares of one design on one set of worlds."""
+    plane = np.mean(measures.errors['plane'] < TOLERANCE)
+    print(f'{bag}: seed {task.seed}, {len(worlds)} {kind} worlds; within 5 mm in the '
+          f'plane {100 * plane:.1f} %')
+    for axis, within, slope, correlation in axis_rows(measures, worlds):
+        print(f'  along {axis}: within 5 mm {100 * within:.1f} %; final position on the '
+              f"start's offset: slope {slope:.2f}, correlation {correlation:.2f}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('bags', nargs='+', help='bags of finished runs')
     parser.add_argument('--unseen', type=int, default=1000, help='unseen worlds (1000)')
+    parser.add_argument('--training', action='store_true',
+                        help="also measure on the run's own training worlds")
+    parser.add_argument('--table', metavar='OUT', help='write OUT.csv and OUT.md')
     arguments = parser.parse_args()
+    rows = []
     for bag in arguments.bags:
         task, x, _ = final_design(bag)
-        worlds = unseen_world_states(task, arguments.unseen)
-        measures = measure_worlds(x, task, worlds)
-        plane = np.mean(measures.errors['plane'] < TOLERANCE)
-        print(f'{bag}: seed {task.seed}, {arguments.unseen} unseen worlds; within 5 mm in the '
-              f'plane {100 * plane:.1f} %')
-        for axis, within, slope, correlation in axis_rows(measures, worlds):
-            print(f'  along {axis}: within 5 mm {100 * within:.1f} %; final position on the '
-                  f"start's offset: slope {slope:.2f}, correlation {correlation:.2f}")
+        sets = [('unseen', unseen_world_states(task, arguments.unseen))]
+        if arguments.training:
+            sets.insert(0, ('training', world_states(task)))
+        for kind, worlds in sets:
+            measures = measure_worlds(x, task, worlds)
+            report(bag, task, kind, measures, worlds)
+            rows.append(table_row(bag, task, kind, measures, worlds))
+    if arguments.table:
+        write_table(arguments.table, rows)
 
 
 if __name__ == '__main__':
