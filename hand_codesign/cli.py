@@ -69,7 +69,9 @@ def add_run_arguments(parser):
     parser.add_argument('--world-states', type=int, help='randomized worlds per candidate')
     parser.add_argument('--engine', choices=('pybullet', 'mujoco'),
                         help="physics engine (default: the task file's physics.engine)")
-    parser.add_argument('--resume', metavar='BAG', help='continue the run recorded in BAG')
+    parser.add_argument('--resume', metavar='BAG',
+                        help='continue the run recorded in BAG (with --iterations N: a '
+                             'finished one, on to N generations)')
     parser.add_argument('--domain-id', type=domain_id_option, metavar='ID|auto',
                         help="ROS_DOMAIN_ID of the run (default: the environment's, as ROS 2 "
                              'tools; 0 if unset); auto: a free one of this host')

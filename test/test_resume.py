@@ -1,14 +1,20 @@
 """Resuming an interrupted run from its bag reaches the result of the uninterrupted run."""
 
+import dataclasses
 import json
 
+from analysis_run import BUDGET
 from analysis_run import copy_bag
 from analysis_run import decoded_messages
+from analysis_run import ROOT
 from analysis_run import run_cli
+from analysis_run import run_codesign
 from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.resume import recorded_evaluations
 from hand_codesign.analysis.resume import resume_point
 from hand_codesign.core.evaluate import evaluate
+from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.search.resume import extended_task
 from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
 import numpy as np
@@ -107,3 +113,50 @@ def test_run_resume_after_interrupting_a_run(real_run, tmp_path):
     result = json.loads((resumed / 'result.json').read_text())
     for key in ('best_candidate_id', 'fitness', 'objectives', 'design'):
         assert result[key] == real_run.result[key], key
+
+
+def test_a_finished_run_continues_as_a_run_of_the_larger_budget(real_run, tmp_path):
+    # the real run had 4 generations; continued to 6, it ends where a 6-generation run of the
+    # same task and seed ends, having evaluated only generations 4 and 5
+    continued = tmp_path / 'continued'
+    finished = run_cli('run', '--resume', real_run.bag, '--iterations', '6', '--evaluators',
+                       '2', '--bag', continued, '--domain-id', 'auto')
+    assert finished.returncode == 0, finished.stdout + finished.stderr
+    assert '6 generations' in finished.stdout + finished.stderr
+    longer = tmp_path / 'longer'
+    budget = list(BUDGET)
+    budget[budget.index('--iterations') + 1] = '6'
+    run_codesign(longer, budget=budget)
+    result = json.loads((continued / 'result.json').read_text())
+    expected = json.loads((longer / 'result.json').read_text())
+    for key in ('best_candidate_id', 'generation', 'fitness', 'objectives', 'design'):
+        assert result[key] == expected[key], key
+    assert result['stop_reason'] == 'maxiter=6'
+    record = read_run(continued)
+    assert record.run_info.iterations == 6
+    assert record.run_info.resumed_from == read_run(real_run.bag).run_info.run_id
+    assert sorted(set(np.asarray(record.candidates['generation']).tolist())) == [4, 5]
+
+
+def test_continuing_asks_for_more_generations_than_the_run_had(real_run, tmp_path):
+    with pytest.raises(UserError, match='continues to more generations than the 4 of'):
+        resume_point(real_run.bag, iterations=4)
+    unused = tmp_path / 'unused'
+    printed = run_cli('run', '--resume', real_run.bag, '--iterations', '3', '--bag', unused)
+    assert printed.returncode != 0 and not unused.exists()
+    assert 'continues to more generations than the 4 of' in printed.stderr
+    assert 'Traceback' not in printed.stderr
+
+
+@pytest.mark.parametrize('preset, kind', [
+    ('task4.yaml', 'a structure hierarchy'), ('task1.yaml', 'two stages'),
+    ('task5.yaml', 'worlds resampled each generation')])
+def test_only_a_run_of_one_optimizer_continues(preset, kind):
+    task = load_run_task(ROOT / 'config' / 'tasks' / preset)
+    if preset == 'task5.yaml':
+        task = task.replace(worlds=dataclasses.replace(task.worlds, resample='generation'))
+    with pytest.raises(UserError, match=f'searches {kind}, whose later batches depend'):
+        extended_task(task, task.iterations + 1, 'bags/run')
+    if preset == 'task5.yaml':
+        plain = load_run_task(ROOT / 'config' / 'tasks' / preset)
+        assert extended_task(plain, 250, 'bags/run').iterations == 250

@@ -11,11 +11,15 @@ import sys
 from hand_codesign.ros import optimizer_node
 
 
-def load_resume(bag):
-    """Return the core.search.resume.ResumePoint of the interrupted run recorded in bag."""
+def load_resume(bag, iterations=0):
+    """
+    Return the core.search.resume.ResumePoint of the run recorded in bag.
+
+    iterations > 0: continue it to that many generations (more than its own).
+    """
     # imported here: a fresh run never reads a bag and starts without the bag readers
     from hand_codesign.analysis.resume import resume_point
-    return resume_point(bag)
+    return resume_point(bag, iterations)
 
 
 def main(args=None):

@@ -158,6 +158,8 @@ def optimizer_parameters(arguments, task, bag):
         parameters['audit_fraction'] = arguments.audit_fraction
     if arguments.resume:
         parameters['resume_bag'] = pathlib.Path(arguments.resume).resolve()
+        if arguments.iterations:  # continue for more generations than the run's own
+            parameters['iterations'] = arguments.iterations
     else:
         parameters.update({
             'task_file': pathlib.Path(arguments.task).resolve(), 'seed': task.seed,
@@ -223,15 +225,21 @@ def check_arguments(arguments):
 
 
 def resumed_task(arguments):
-    """Return the Task of the interrupted run in --resume's bag; it fixes task and budget."""
-    given = [flag for flag in ('task', 'seed', 'iterations', 'popsize', 'world_states',
-                               'engine')
+    """
+    Return the Task of the run in --resume's bag; it fixes task, seed and budget.
+
+    With --iterations, more generations than the run's own: a finished run continues.
+    """
+    given = [flag for flag in ('task', 'seed', 'popsize', 'world_states', 'engine')
              if getattr(arguments, flag, None) is not None]
     if given:
         raise UserError('--resume takes the task, seed and budget from the bag; drop '
-                        + ', '.join('--' + flag.replace('_', '-') for flag in given))
+                        + ', '.join('--' + flag.replace('_', '-') for flag in given)
+                        + ' (--iterations continues the run for more generations)')
+    if arguments.iterations is not None and arguments.iterations < 1:
+        raise UserError(f'--iterations: expected a positive number, got {arguments.iterations}')
     from hand_codesign.analysis.resume import resume_point
-    point = resume_point(arguments.resume)
+    point = resume_point(arguments.resume, arguments.iterations or 0)
     if not arguments.quiet:
         print(point.describe(), flush=True)
     return point.task

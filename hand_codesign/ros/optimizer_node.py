@@ -33,7 +33,8 @@ from rclpy.task import Future
 PARAMETERS = {
     'task_file': ('', 'task file (YAML); a relative one also in the package share/', None),
     'seed': (-1, "run seed; -1 keeps the task file's", (-1, 2**32 - 1)),
-    'iterations': (0, "generations; 0 keeps the task file's", (0, 10**6)),
+    'iterations': (0, "generations; 0 keeps the task file's (with resume_bag: the run's)",
+                   (0, 10**6)),
     'population': (0, "candidates per generation; 0 keeps the task file's", (0, 10**5)),
     'world_states': (0, "randomized worlds per candidate; 0 keeps the task file's", (0, 10**6)),
     'engine': ('', "physics engine, pybullet or mujoco; empty keeps the task file's", None),
@@ -59,11 +60,11 @@ class OptimizerNode(Node):
         self.finished = Future()
         self.signer = OptimizerSigner.from_environment()
         resumed = None
-        if self.settings['resume_bag']:  # the run in the bag fixes task, seed and budget
+        if self.settings['resume_bag']:  # the run in the bag fixes task, seed, budget
             if load_resume is None:
                 raise UserError('parameter resume_bag: this entry point cannot read bags; start '
                                 '`python -m hand_codesign.commands.optimizer` instead')
-            resumed = load_resume(self.settings['resume_bag'])
+            resumed = load_resume(self.settings['resume_bag'], self.settings['iterations'])
             task = resumed.task
             self.log(resumed.describe())
         else:

@@ -14,6 +14,12 @@ Where the recorded evaluations come from (a bag) is not this module's concern:
     point.search      # core.search.search.Search, at the interruption
     point.known       # id -> objectives of the pending batch already recorded: do not
                       # evaluate those again
+
+A finished run of one optimizer continues for more generations with the same replay:
+`extended_task(task, iterations, source)` is its task with the larger budget. The optimizers
+sample the same candidates whatever their generation budget (it only ends a run), so the
+replayed generations are the recorded ones and the run goes on as one that had the larger
+budget from its start.
 """
 
 import dataclasses
@@ -51,10 +57,34 @@ class ResumePoint:
 
     def describe(self):
         """Return a one-line account of what was recovered."""
-        return (f'resuming run {self.run_id} of task {self.task.name} (seed {self.task.seed}): '
+        return (f'resuming run {self.run_id} of task {self.task.name} (seed {self.task.seed}, '
+                f'{self.task.iterations} generations): '
                 f'{self.batches_told} batches ({self.evaluations_told} evaluations) replayed '
                 f'from the bag, {len(self.known)} evaluations of the next batch recovered, '
                 f'{len(self.to_evaluate)} to evaluate next')
+
+
+def extended_task(task, iterations, source):
+    """
+    Return task with `iterations` generations, more than its own, to continue a run of it.
+
+    Raise UserError (naming `source`, the run's record) for a budget that is not larger, or for
+    a search whose later batches depend on where it ends: a hierarchy (each structure's
+    generations), a two-stage task (stage 2 starts after stage 1's last generation) and
+    resampled worlds (a final check follows the last generation).
+    """
+    if iterations <= task.iterations:
+        raise UserError(f'--iterations {iterations}: a resumed run continues to more '
+                        f'generations than the {task.iterations} of {source}')
+    kind = ('a structure hierarchy' if task.hierarchy is not None
+            else 'two stages' if task.two_stage
+            else 'worlds resampled each generation' if task.worlds.resample == 'generation'
+            else None)
+    if kind:
+        raise UserError(f'--iterations with --resume: {source} searches {kind}, whose later '
+                        'batches depend on its budget; only a run of one optimizer continues '
+                        'for more generations')
+    return task.replace(iterations=int(iterations))
 
 
 def rebuild_search(task, run_id, source, recorded, genomes, record=None):
