@@ -28,6 +28,7 @@ from hand_codesign.core.search.optimizers import replay
 from hand_codesign.core.search.optimizers import ReplayError
 from hand_codesign.core.search.optimizers import TellError
 from hand_codesign.core.search.search import Search
+from hand_codesign.core.task.parts import RESTART_ALGORITHMS
 from hand_codesign.errors import UserError
 
 
@@ -70,8 +71,9 @@ def extended_task(task, iterations, source):
 
     Raise UserError (naming `source`, the run's record) for a budget that is not larger, or for
     a search whose later batches depend on where it ends: a hierarchy (each structure's
-    generations), a two-stage task (stage 2 starts after stage 1's last generation) and
-    resampled worlds (a final check follows the last generation).
+    generations), a two-stage task (stage 2 starts after stage 1's last generation),
+    resampled worlds (a final check follows the last generation) and restarts (the budget
+    cuts the last generation and bounds an instance).
     """
     if iterations <= task.iterations:
         raise UserError(f'--iterations {iterations}: a resumed run continues to more '
@@ -79,6 +81,7 @@ def extended_task(task, iterations, source):
     kind = ('a structure hierarchy' if task.hierarchy is not None
             else 'two stages' if task.two_stage
             else 'worlds resampled each generation' if task.worlds.resample == 'generation'
+            else f'with restarts ({task.algorithm})' if task.algorithm in RESTART_ALGORITHMS
             else None)
     if kind:
         raise UserError(f'--iterations with --resume: {source} searches {kind}, whose later '
