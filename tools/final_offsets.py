@@ -44,14 +44,13 @@ def axis_rows(measures, worlds):
     return rows
 
 
-def table_row(bag, task, kind, measures, worlds):
+def table_row(bag, task, kind, measures, axes):
     """Return the table's row (dict of COLUMNS) of one design on one set of worlds."""
     plane = measures.errors['plane']
-    _, _, slope_y, correlation_y = axis_rows(measures, worlds)[1]
+    (_, within_x, _, _), (_, within_y, slope_y, correlation_y) = axes
     return {'run': pathlib.Path(bag).name, 'seed': task.seed, 'worlds': kind,
-            'count': len(plane),
-            **{f'within_{axis}': float(np.mean(measures.errors[axis] < TOLERANCE))
-               for axis in ('plane', 'x', 'y')},
+            'count': len(plane), 'within_plane': float(np.mean(plane < TOLERANCE)),
+            'within_x': within_x, 'within_y': within_y,
             'median_plane_mm': 1000 * float(np.median(plane)),
             'p90_plane_mm': 1000 * float(np.percentile(plane, 90)),
             'slope_y': slope_y, 'correlation_y': correlation_y}
@@ -76,12 +75,11 @@ def write_table(out, rows):
     print(f'wrote {out.with_suffix(".csv")} and {out.with_suffix(".md")}')
 
 
-def report(bag, task, kind, measures, worlds):
-    """Print the shares of one design on one set of worlds."""
-    plane = np.mean(measures.errors['plane'] < TOLERANCE)
-    print(f'{bag}: seed {task.seed}, {len(worlds)} {kind} worlds; within 5 mm in the '
-          f'plane {100 * plane:.1f} %')
-    for axis, within, slope, correlation in axis_rows(measures, worlds):
+def report(bag, task, kind, row, axes):
+    """Print the shares of one design on one set of worlds (its table row and axis rows)."""
+    print(f"{bag}: seed {task.seed}, {row['count']} {kind} worlds; within 5 mm in the "
+          f"plane {100 * row['within_plane']:.1f} %")
+    for axis, within, slope, correlation in axes:
         print(f'  along {axis}: within 5 mm {100 * within:.1f} %; final position on the '
               f"start's offset: slope {slope:.2f}, correlation {correlation:.2f}")
 
@@ -102,8 +100,9 @@ def main():
             sets.insert(0, ('training', world_states(task)))
         for kind, worlds in sets:
             measures = measure_worlds(x, task, worlds)
-            report(bag, task, kind, measures, worlds)
-            rows.append(table_row(bag, task, kind, measures, worlds))
+            axes = axis_rows(measures, worlds)
+            rows.append(table_row(bag, task, kind, measures, axes))
+            report(bag, task, kind, rows[-1], axes)
     if arguments.table:
         write_table(arguments.table, rows)
 

@@ -199,6 +199,11 @@ def check_arguments(arguments):
     if arguments.live is not None and not 0 <= arguments.live <= 65535:
         raise UserError(f'--live: expected a TCP port from 0 (any free one) to 65535, got '
                         f'{arguments.live}')
+    for flag in ('iterations', 'popsize', 'world_states'):
+        value = getattr(arguments, flag)
+        if value is not None and value < 1:
+            raise UserError(f'--{flag.replace("_", "-")}: expected a positive number, '
+                            f'got {value}')
     if arguments.resume:
         return resumed_task(arguments)
     if not arguments.task:
@@ -211,11 +216,6 @@ def check_arguments(arguments):
     fraction = getattr(arguments, 'audit_fraction', None)
     if fraction is not None and not 0.0 <= fraction <= 1.0:
         raise UserError(f'--audit-fraction: expected a share from 0 to 1, got {fraction}')
-    for flag in ('iterations', 'popsize', 'world_states'):
-        value = getattr(arguments, flag)
-        if value is not None and value < 1:
-            raise UserError(f'--{flag.replace("_", "-")}: expected a positive number, '
-                            f'got {value}')
     try:
         return load_run_task(arguments.task, arguments.seed, arguments.iterations,
                              arguments.popsize, arguments.world_states,
@@ -236,8 +236,6 @@ def resumed_task(arguments):
         raise UserError('--resume takes the task, seed and budget from the bag; drop '
                         + ', '.join('--' + flag.replace('_', '-') for flag in given)
                         + ' (--iterations continues the run for more generations)')
-    if arguments.iterations is not None and arguments.iterations < 1:
-        raise UserError(f'--iterations: expected a positive number, got {arguments.iterations}')
     from hand_codesign.analysis.resume import resume_point
     point = resume_point(arguments.resume, arguments.iterations or 0)
     if not arguments.quiet:
