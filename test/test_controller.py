@@ -218,6 +218,26 @@ def test_a_resumed_run_sends_only_what_its_record_lacks_and_ends_alike():
     assert outbox.result['evaluations'] == 24
 
 
+def test_a_resumed_runs_rate_and_time_left_count_only_what_it_evaluated():
+    task = task5(iterations=4)
+    search, recorded, genomes = Search(task), {}, {}
+    for _ in range(2):
+        batch = search.ask()
+        for candidate in batch:
+            recorded[candidate.candidate_id] = objectives_of(candidate.x,
+                                                             len(task.objective_names))
+            genomes[candidate.candidate_id] = candidate.x
+        search.tell({c.candidate_id: recorded[c.candidate_id] for c in batch})
+    point = rebuild_search(task, 'old-run', 'the record', recorded, genomes)
+    clock = Clock()
+    controller, outbox = start(task, clock, resumed=point, audit_fraction=0.0)
+    answer_everything(controller, outbox, len(task.objective_names), clock)
+    # generation 3: 6 answers in 3 s here (the record's 12 took no time here), so 2 per second
+    # and 3 s for the last 6
+    line = next(text for _, text in outbox.lines if text.startswith('generation 3/4'))
+    assert '| 18 evaluations, 2.0/s |' in line and line.endswith('about 3 s left')
+
+
 def test_a_hierarchy_checks_each_structure_on_its_evaluation_worlds():
     task = load_run_task(TASKS / 'task4.yaml', 3, 1, 4, 2)
     clock = Clock()

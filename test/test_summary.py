@@ -44,3 +44,4 @@ def test_the_progress_line_says_where_the_run_is():
     # a long run's time left in hours and minutes, not raw seconds
     assert progress_line(summary, 10, 3.2, 5400.0).endswith('about 1 h 30 min left')
     assert progress_line(summary, 10, 3.2, 754.0).endswith('about 12 min left')
+    assert progress_line(summary, 10, 0.0, None).endswith('| time left not known yet')

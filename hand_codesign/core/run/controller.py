@@ -28,6 +28,8 @@ the
 - an answer is taken only as core.run.audits decides: some go to a second evaluator first, a
   mismatch to a third, and a liar is quarantined (its untold answers are evaluated again).
   Audits are cost, not progress: neither the evaluations told nor the rate count them.
+- the progress line's rate and time left count only the evaluations this process sent: a
+  resumed run's replayed record took no time here.
 """
 
 import collections
@@ -90,6 +92,8 @@ class RunController:
         self.genome_names = ()
         self.physical = {}  # candidate id -> PhysicalDesign of the batch in flight
         self.results = {}
+        self.known_in_batch = 0    # answers of the batch in flight taken from a resumed record
+        self.evaluated_here = 0    # evaluations told that this process sent out
         self.last_summary = None
         self.started = None
         self.finished = False
@@ -226,6 +230,7 @@ class RunController:
         known = self.resumed.known if self.resumed is not None else {}
         self.results = {candidate.candidate_id: known[candidate.candidate_id]
                         for candidate in self.batch if candidate.candidate_id in known}
+        self.known_in_batch = len(self.results)
         self.dispatcher.add([candidate for candidate in self.batch
                              if candidate.candidate_id not in self.results])
 
@@ -243,6 +248,7 @@ class RunController:
         optimizer = self.search.optimizer
         self.search.tell(self.results)
         self.told += len(self.batch)
+        self.evaluated_here += len(self.batch) - self.known_in_batch
         told_ids = [candidate.candidate_id for candidate in self.batch]
         objectives = np.array([objectives_of(self.results[candidate_id])
                                for candidate_id in told_ids])
@@ -276,9 +282,9 @@ class RunController:
             return
         self.last_summary = summary
         # a budget of evaluations: with restarts (core.search.restarts) generations grow
-        done = optimizer.evaluations
-        left = elapsed / done * (self.task.iterations * self.task.population - done)
-        rate = self.told / max(elapsed, 1e-9)  # a fake clock may not have moved
+        rate = self.evaluated_here / max(elapsed, 1e-9)  # a fake clock may not have moved
+        to_go = self.task.iterations * self.task.population - optimizer.evaluations
+        left = to_go / rate if rate > 0 else None
         line = progress_line(summary, self.task.iterations, rate, left)
         if self.audits.audit_evaluations:
             line += f' | {self.audits.audit_evaluations} audit evaluations'

@@ -41,7 +41,12 @@ def generation_summary(generation, structure, names, told_ids, objectives, resul
 
 
 def progress_line(summary, iterations, rate, seconds_left):
-    """Return the one-line progress report of a generation for the terminal."""
+    """
+    Return the one-line progress report of a generation for the terminal.
+
+    rate: evaluations per second of this process; seconds_left: None while unknown (a resumed
+    run whose first generation came whole from its record).
+    """
     best = ', '.join(f'{name} {value:.4g}'
                      for name, value in zip(summary['names'], summary['best_objectives']))
     structure = 'x'.join(str(joints) for joints in summary['structure'])
@@ -57,7 +62,8 @@ def progress_line(summary, iterations, rate, seconds_left):
     return (f'{position} [{structure}] | '
             f'{summary["evaluations"]} evaluations, {rate:.1f}/s | best fitness '
             f'{summary["best_fitness"]:.4g} ({best}) | '
-            f'about {format_duration(seconds_left)} left')
+            + (f'about {format_duration(seconds_left)} left' if seconds_left is not None
+               else 'time left not known yet'))
 
 
 def format_duration(seconds):
