@@ -78,6 +78,9 @@ class RunController:
         self.resumed = resumed
         self.search = resumed.search if resumed is not None else Search(task)
         self.told = resumed.evaluations_told if resumed is not None else 0
+        # what a resumed run's record holds (its told batches and the pending batch's known
+        # answers) is told here without being evaluated here
+        self.replayed = self.told + (len(resumed.known) if resumed is not None else 0)
         self.evaluators_expected = evaluators_expected
         self.clock = clock
         self.dispatcher = Dispatcher(heartbeat_timeout,
@@ -92,8 +95,6 @@ class RunController:
         self.genome_names = ()
         self.physical = {}  # candidate id -> PhysicalDesign of the batch in flight
         self.results = {}
-        self.known_in_batch = 0    # answers of the batch in flight taken from a resumed record
-        self.evaluated_here = 0    # evaluations told that this process sent out
         self.last_summary = None
         self.started = None
         self.finished = False
@@ -230,7 +231,6 @@ class RunController:
         known = self.resumed.known if self.resumed is not None else {}
         self.results = {candidate.candidate_id: known[candidate.candidate_id]
                         for candidate in self.batch if candidate.candidate_id in known}
-        self.known_in_batch = len(self.results)
         self.dispatcher.add([candidate for candidate in self.batch
                              if candidate.candidate_id not in self.results])
 
@@ -248,7 +248,6 @@ class RunController:
         optimizer = self.search.optimizer
         self.search.tell(self.results)
         self.told += len(self.batch)
-        self.evaluated_here += len(self.batch) - self.known_in_batch
         told_ids = [candidate.candidate_id for candidate in self.batch]
         objectives = np.array([objectives_of(self.results[candidate_id])
                                for candidate_id in told_ids])
@@ -282,7 +281,7 @@ class RunController:
             return
         self.last_summary = summary
         # a budget of evaluations: with restarts (core.search.restarts) generations grow
-        rate = self.evaluated_here / max(elapsed, 1e-9)  # a fake clock may not have moved
+        rate = (self.told - self.replayed) / max(elapsed, 1e-9)  # a fake clock may not move
         to_go = self.task.iterations * self.task.population - optimizer.evaluations
         left = to_go / rate if rate > 0 else None
         line = progress_line(summary, self.task.iterations, rate, left)
