@@ -464,8 +464,11 @@ def test_run_joins_the_ros_domain_of_the_users_shell(tmp_path):
     for attempt in range(5):   # another run of this host may claim the free domain first
         domain = free_domain()
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
-        listener = subprocess.Popen([sys.executable, '-c', LISTENER], env=env,
-                                    stdout=subprocess.PIPE, text=True)
+        # the listener starts before the run, so the run finds it when it announces itself
+        # again (test/announce_long.xml): a run of the tests can end before Fast DDS's 3 s
+        listener = subprocess.Popen([sys.executable, '-c', LISTENER], stdout=subprocess.PIPE,
+                                    text=True, env=dict(env, FASTRTPS_DEFAULT_PROFILES_FILE=str(
+                                        ROOT / 'test' / 'announce_long.xml')))
         listener.stdout.readline()   # subscribed before the run starts: no summary is missed
         command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
                    '--evaluators', '1', '--bag', str(tmp_path / str(attempt)), *BUDGET]
@@ -476,4 +479,4 @@ def test_run_joins_the_ros_domain_of_the_users_shell(tmp_path):
             break
     assert run.returncode == 0, run.stdout + run.stderr
     assert f"ROS_DOMAIN_ID={domain} (the environment's ROS_DOMAIN_ID)" in run.stdout
-    assert int(heard) >= 1
+    assert int(heard) >= 1, run.stdout + run.stderr
