@@ -129,7 +129,7 @@ def test_each_world_is_independent_of_the_others(task):
 # became a task option (Task 5 with its plane and orientation goals, as config/reproduce/
 # pins it): Table I's settings must keep them bit for bit. Change them only with a change that
 # means to change the physics. One set per kind of machine: the last bits of the math library
-# depend on the processor (glibc picks its FMA or SSE2 routines, numpy its SIMD ones), so
+# depend on the processor (glibc picks its FMA or SSE2 routines by it), so
 # machines of another kind agree on some candidates and not on others. The first set is the
 # machines' the tests ran on until 2026-12-03; the second an AMD EPYC with AVX2 and FMA and no
 # AVX-512 (numpy: X86_V3 found, X86_V4 not). With GLIBC_TUNABLES=glibc.cpu.hwcaps=-FMA all

@@ -31,6 +31,8 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK = ROOT / 'config' / 'tasks' / 'task5.yaml'
+# for a process that starts before a run: it announces itself often (the file says why)
+ANNOUNCE_OFTEN = ROOT / 'test' / 'announce_long.xml'
 BUDGET = ['--iterations', '3', '--popsize', '6', '--world-states', '3', '--seed', '7']
 SUMMARY_FIELDS = ['generation', 'best', 'median', 'worst', 'pareto_front',
                   'best_candidate_id', 'best_objectives', 'best_fitness', 'best_genome',
@@ -211,7 +213,7 @@ def test_a_forger_without_a_key_changes_nothing_and_is_counted(one_evaluator_run
     for _ in range(5):   # another run of this host may claim the free domain first
         domain = free_domain()
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
-                   FASTRTPS_DEFAULT_PROFILES_FILE=str(ROOT / 'test' / 'announce_long.xml'))
+                   FASTRTPS_DEFAULT_PROFILES_FILE=str(ANNOUNCE_OFTEN))
         # the intruder waits for the run's RunInfo, then forges an answer to every candidate
         intruder = subprocess.Popen([sys.executable, str(ROOT / 'test' / 'intruder.py')],
                                     env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -466,9 +468,9 @@ def test_run_joins_the_ros_domain_of_the_users_shell(tmp_path):
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
         # the listener starts before the run, so the run finds it when it announces itself
         # again (test/announce_long.xml): a run of the tests can end before Fast DDS's 3 s
-        listener = subprocess.Popen([sys.executable, '-c', LISTENER], stdout=subprocess.PIPE,
-                                    text=True, env=dict(env, FASTRTPS_DEFAULT_PROFILES_FILE=str(
-                                        ROOT / 'test' / 'announce_long.xml')))
+        listener_env = dict(env, FASTRTPS_DEFAULT_PROFILES_FILE=str(ANNOUNCE_OFTEN))
+        listener = subprocess.Popen([sys.executable, '-c', LISTENER], env=listener_env,
+                                    stdout=subprocess.PIPE, text=True)
         listener.stdout.readline()   # subscribed before the run starts: no summary is missed
         command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
                    '--evaluators', '1', '--bag', str(tmp_path / str(attempt)), *BUDGET]
