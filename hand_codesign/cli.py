@@ -133,8 +133,8 @@ def add_reproduce_arguments(parser):
                         help='smoke (minutes), reduced (about an hour per experiment on 2 '
                              "cores) or paper (Table I's); default reduced")
     parser.add_argument('--seeds',
-                        help='the seeds of every configuration: N for 1 to N, A-B, or A,B,... '
-                             "(default: the budget's, from 1)")
+                        help='the seeds of every configuration: N for 1 to N (N up to 20), A-B, '
+                             "or A,B,... (default: the budget's, from 1)")
     parser.add_argument('--evaluators', type=int, default=2,
                         help='evaluator processes per run (default 2)')
     parser.add_argument('--out', help='campaign folder (default results/EXPERIMENT-BUDGET); '

@@ -490,3 +490,8 @@ def test_seeds_are_a_count_a_range_or_a_list(capsys):
         assert error.count('\n') == 0 and '--seeds' in error and repr(bad) in error
     assert cli.main(['reproduce', 'levers-task6', '--seeds', '9-1']) == 2
     assert 'a range runs upwards: 1-9' in capsys.readouterr().err
+    # A bare 105 is a user who wants seed 105, not 105 runs of every configuration.
+    assert cli.main(['reproduce', 'levers-task6', '--seeds', '105']) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count('\n') == 0 and '105-105' in error and '1-105' in error
+    assert catalog.parse_seeds('1-105') == tuple(range(1, 106))

@@ -323,17 +323,25 @@ def configuration_task_text(configuration, preset_text):
             + yaml.safe_dump(task, sort_keys=False))
 
 
+MOST_SEEDS_COUNTED = 20
+"""A bare N above this is refused: '--seeds 105' is likelier meant as seed 105 than as 105 runs."""
+
+
 def parse_seeds(text):
     """
     Return the seeds a `--seeds` value names, in order, each once.
 
-    'N' is seeds 1 to N (the tuning seeds 1-3 are '3'), 'A-B' the range A to B ('101-105',
-    the fresh seeds of the headline figures), 'A,B,...' a list. Raises ValueError with what
-    was expected otherwise.
+    'N' is seeds 1 to N (the tuning seeds 1-3 are '3'; N at most MOST_SEEDS_COUNTED), 'A-B' the
+    range A to B ('101-105', the fresh seeds of the headline figures), 'A,B,...' a list.
+    Raises ValueError with what was expected otherwise.
     """
     text = str(text).strip()
     expected = f'--seeds: expected N (seeds 1 to N), A-B or A,B,...; got {text!r}'
     if re.fullmatch(r'\d+', text):
+        if int(text) > MOST_SEEDS_COUNTED:
+            raise ValueError(f'--seeds: {text} alone means seeds 1 to {text}, {text} runs of '
+                             f'every configuration; write {text}-{text} for seed {text} only, '
+                             f'or 1-{text} for all of them')
         seeds = tuple(range(1, int(text) + 1))
     elif re.fullmatch(r'\d+-\d+', text):
         first, last = (int(part) for part in text.split('-'))
