@@ -338,11 +338,12 @@ def parse_seeds(text):
     text = str(text).strip()
     expected = f'--seeds: expected N (seeds 1 to N), A-B or A,B,...; got {text!r}'
     if re.fullmatch(r'\d+', text):
-        if int(text) > MOST_SEEDS_COUNTED:
-            raise ValueError(f'--seeds: {text} alone means seeds 1 to {text}, {text} runs of '
-                             f'every configuration; write {text}-{text} for seed {text} only, '
-                             f'or 1-{text} for all of them')
-        seeds = tuple(range(1, int(text) + 1))
+        count = int(text)
+        if count > MOST_SEEDS_COUNTED:
+            raise ValueError(f'--seeds: {count} alone means seeds 1 to {count}, {count} runs of '
+                             f'every configuration; write {count}-{count} for seed {count} only, '
+                             f'or 1-{count} for all of them')
+        seeds = tuple(range(1, count + 1))
     elif re.fullmatch(r'\d+-\d+', text):
         first, last = (int(part) for part in text.split('-'))
         if last < first:
