@@ -199,6 +199,28 @@ def _palm_beside_configuration(name):
                          'torque')
 
 
+def _palm_beside_lever_configurations():
+    """
+    Return CMA-ES on Task 6's paper hand (the palm beside the box) with one lever each.
+
+    At Table I's budget its designs miss Task 6's target in a tail of worlds, the large
+    boxes (scales 1.5 to 2) most. The levers that could lift that tail inside the paper's
+    design space and budget: the worst quarter of the worlds as each candidate's score,
+    worlds resampled each generation, both at once, a larger initial step, and the palm
+    placed 1 cm further from the box (the fixed hand's placement is our reading of Table I,
+    as are its axes). Chosen on tuning seeds 1 to 3 (issue 26).
+    """
+    worst = (('worlds.aggregate', 'worst'), ('worlds.fraction', 0.25))
+    resample = (('worlds.resample', 'generation'),)
+    variants = (('worst25', worst), ('resample', resample),
+                ('worst25-resample', worst + resample),
+                ('sigma-0.2', (('optimizer.initial_sigma', 0.2),)),
+                ('palm-85mm', (('hand.base_position', (-0.085, 0.0, 0.015)),)))
+    return tuple(Configuration(f'cma-palm-beside-{name}', 'task6_palm_beside.yaml', 'cma',
+                               LEVER_WORLDS, 'torque', options)
+                 for name, options in variants)
+
+
 def _lever_budgets(paper_worlds):
     """Return issue 12's budgets: 40 x 40 on 16 worlds, and Table I's, each over 5 seeds."""
     return {'smoke': Budget('smoke', 4, 8, 100, 1, world_states=4),
@@ -269,7 +291,8 @@ EXPERIMENTS = {
         'measured on the smaller half of the boxes alone',
         _lever_configurations('task6.yaml')
         + _preset_lever_configurations('task6_diagonal.yaml', 'diagonal')
-        + _diagonal_hand_configurations() + (_palm_beside_configuration('task6'),),
+        + _diagonal_hand_configurations() + (_palm_beside_configuration('task6'),)
+        + _palm_beside_lever_configurations(),
         ORIENTATION_01,
         _lever_budgets(128),
         convergence=True, beyond_paper=True),
