@@ -162,6 +162,35 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
     assert catalog.training_worlds(by_key['cma'], levers.budget('paper')) == 64
 
 
+def test_task6_paper_hand_levers_change_one_thing_each():
+    # the levers on Task 6's paper hand (the palm beside the box), chosen on tuning seeds
+    text = (catalog.pinned_dir() / 'task6_palm_beside.yaml').read_text()
+    pinned = parse_task(text).replace(source_text='')
+    by_key = {c.key: c for c in catalog.EXPERIMENTS['levers-task6'].configurations
+              if c.key.startswith('cma-palm-beside-')}
+    assert len(by_key) == 5 and all(c.preset == 'task6_palm_beside.yaml'
+                                    for c in by_key.values())
+
+    def lever(key):
+        return parse_task(catalog.configuration_task_text(by_key[key], text)).replace(
+            source_text='')
+
+    worst, both = lever('cma-palm-beside-worst25'), lever('cma-palm-beside-worst25-resample')
+    assert (worst.worlds.aggregate, worst.worlds.fraction) == ('worst', 0.25)
+    assert lever('cma-palm-beside-resample').worlds.resample == 'generation'
+    assert (both.worlds.aggregate, both.worlds.resample) == ('worst', 'generation')
+    for key in ('cma-palm-beside-worst25', 'cma-palm-beside-resample',
+                'cma-palm-beside-worst25-resample'):
+        assert lever(key).replace(worlds=pinned.worlds) == pinned
+    wider = lever('cma-palm-beside-sigma-0.2')
+    assert wider.initial_sigma == 0.2 and wider.replace(
+        initial_sigma=pinned.initial_sigma) == pinned
+    further = lever('cma-palm-beside-palm-85mm')
+    np.testing.assert_allclose(further.hand.base_position, (-0.085, 0.0, 0.015))
+    np.testing.assert_allclose(pinned.hand.base_position, (-0.075, 0.0, 0.015))
+    assert further.replace(hand=pinned.hand) == pinned
+
+
 def test_unseen_worlds_are_disjoint_from_training_and_nested():
     task = load_task(TASK5).replace(seed=3)
     unseen = unseen_world_states(task, 200)
