@@ -168,7 +168,7 @@ def test_task6_paper_hand_levers_change_one_thing_each():
     pinned = parse_task(text).replace(source_text='')
     by_key = {c.key: c for c in catalog.EXPERIMENTS['levers-task6'].configurations
               if c.key.startswith('cma-palm-beside-')}
-    assert len(by_key) == 5 and all(c.preset == 'task6_palm_beside.yaml'
+    assert len(by_key) == 6 and all(c.preset == 'task6_palm_beside.yaml'
                                     for c in by_key.values())
 
     def lever(key):
@@ -185,10 +185,12 @@ def test_task6_paper_hand_levers_change_one_thing_each():
     wider = lever('cma-palm-beside-sigma-0.2')
     assert wider.initial_sigma == 0.2 and wider.replace(
         initial_sigma=pinned.initial_sigma) == pinned
-    further = lever('cma-palm-beside-palm-85mm')
-    np.testing.assert_allclose(further.hand.base_position, (-0.085, 0.0, 0.015))
     np.testing.assert_allclose(pinned.hand.base_position, (-0.075, 0.0, 0.015))
-    assert further.replace(hand=pinned.hand) == pinned
+    for key, distance in (('cma-palm-beside-palm-85mm', 0.085),
+                          ('cma-palm-beside-palm-70mm', 0.07)):
+        moved = lever(key)
+        np.testing.assert_allclose(moved.hand.base_position, (-distance, 0.0, 0.015))
+        assert moved.replace(hand=pinned.hand) == pinned
 
 
 def test_unseen_worlds_are_disjoint_from_training_and_nested():
