@@ -207,9 +207,9 @@ def _palm_beside_lever_configurations():
     boxes (scales 1.5 to 2) most. The levers that could lift that tail inside the paper's
     design space and budget: the worst quarter of the worlds as each candidate's score,
     worlds resampled each generation, both at once, a larger initial step, and the palm
-    placed 1 cm further from the box or 0.5 cm closer (its face then 1 mm beyond the
-    largest box's corner at the goal; the fixed hand's placement is our reading of Table I,
-    as are its axes). Chosen on tuning seeds 1 to 3 (issue 26).
+    placed 1 cm further from the box or 0.5 cm closer (its face then 3 mm beyond the
+    farthest corner of the largest box turned to the goal; the fixed hand's placement is our
+    reading of Table I, as are its axes). Chosen on tuning seeds 1 to 3 (issue 26).
     """
     worst = (('worlds.aggregate', 'worst'), ('worlds.fraction', 0.25))
     resample = (('worlds.resample', 'generation'),)
