@@ -35,7 +35,9 @@ placement) and on the smaller half of the boxes alone. On
 each of these two presets CMA-MAE also spans its archive by an outcome of the rollouts
 (`cma-mae-limit-rest-along-x`, `cma-mae-limit-rest-diagonal`: the joint-limit span and
 limit_rest, the share of worlds in which a design ends on a joint limit while touching the
-box, core.outcomes).
+box, core.outcomes). `levers-task6` also runs levers on Task 6's paper hand (the palm beside
+the box, `cma-palm-beside-*`), among which the worst quarter of the worlds was chosen on
+tuning seeds 1 to 3 to lift its tail (issue 26).
 """
 
 import dataclasses
