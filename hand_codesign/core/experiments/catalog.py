@@ -116,6 +116,12 @@ def _budgets(smoke, reduced, paper):
             for name, values in zip(BUDGET_NAMES, (smoke, reduced, paper))}
 
 
+# the levers of the worlds, as (dotted task key, value) options: each candidate scored on the
+# worst quarter of its worlds (CVaR), and worlds drawn afresh each generation
+WORST_QUARTER = (('worlds.aggregate', 'worst'), ('worlds.fraction', 0.25))
+RESAMPLED = (('worlds.resample', 'generation'),)
+
+
 def _joint_limit_configurations(preset, name, policies):
     return tuple(
         Configuration(f'{policy}-{algorithm}-{worlds}w', policy_preset, algorithm, worlds,
@@ -128,11 +134,8 @@ def _lever_configurations(preset):
     """Return the paper's algorithms and each lever of the search beyond it, on one preset."""
     levers = (('cma', 'cma', ()), ('mocma', 'mocma', ()), ('ipop-cma', 'ipop-cma', ()),
               ('bipop-cma', 'bipop-cma', ()),
-              ('cma-worst25', 'cma', (('worlds.aggregate', 'worst'), ('worlds.fraction', 0.25))),
-              ('cma-resample', 'cma', (('worlds.resample', 'generation'),)),
-              ('cma-worst25-resample', 'cma', (('worlds.aggregate', 'worst'),
-                                               ('worlds.fraction', 0.25),
-                                               ('worlds.resample', 'generation'))),
+              ('cma-worst25', 'cma', WORST_QUARTER), ('cma-resample', 'cma', RESAMPLED),
+              ('cma-worst25-resample', 'cma', WORST_QUARTER + RESAMPLED),
               ('cma-mae', 'cma-mae', ()))
     return tuple(Configuration(key, preset, algorithm, LEVER_WORLDS, 'torque', options)
                  for key, algorithm, options in levers)
@@ -213,10 +216,8 @@ def _palm_beside_lever_configurations():
     farthest corner of the largest box turned to the goal; the fixed hand's placement is our
     reading of Table I, as are its axes). Chosen on tuning seeds 1 to 3 (issue 26).
     """
-    worst = (('worlds.aggregate', 'worst'), ('worlds.fraction', 0.25))
-    resample = (('worlds.resample', 'generation'),)
-    variants = (('worst25', worst), ('resample', resample),
-                ('worst25-resample', worst + resample),
+    variants = (('worst25', WORST_QUARTER), ('resample', RESAMPLED),
+                ('worst25-resample', WORST_QUARTER + RESAMPLED),
                 ('sigma-0.2', (('optimizer.initial_sigma', 0.2),)),
                 ('palm-85mm', (('hand.base_position', (-0.085, 0.0, 0.015)),)),
                 ('palm-70mm', (('hand.base_position', (-0.07, 0.0, 0.015)),)))
