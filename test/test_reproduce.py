@@ -167,7 +167,7 @@ def test_task6_paper_hand_levers_change_one_thing_each():
     text = (catalog.pinned_dir() / 'task6_palm_beside.yaml').read_text()
     pinned = parse_task(text).replace(source_text='')
     by_key = {c.key: c for c in catalog.EXPERIMENTS['levers-task6'].configurations
-              if c.key.startswith('cma-palm-beside-')}
+              if c.key.startswith('cma-palm-beside-') and 'hardest' not in c.key}
     assert len(by_key) == 6 and all(c.preset == 'task6_palm_beside.yaml'
                                     for c in by_key.values())
 
@@ -191,6 +191,32 @@ def test_task6_paper_hand_levers_change_one_thing_each():
         moved = lever(key)
         np.testing.assert_allclose(moved.hand.base_position, (-distance, 0.0, 0.015))
         assert moved.replace(hand=pinned.hand) == pinned
+
+
+def test_task6_hardest_boxes_probes_narrow_the_worlds_to_their_corner():
+    # the probes train and measure Task 6's paper hand on the boxes hardest to turn alone
+    text = (catalog.pinned_dir() / 'task6_palm_beside.yaml').read_text()
+    pinned = parse_task(text).replace(source_text='')
+    by_key = {c.key: c for c in catalog.EXPERIMENTS['levers-task6'].configurations}
+
+    def probe(key):
+        return parse_task(catalog.configuration_task_text(by_key[key], text)).replace(
+            source_text='')
+
+    corner = probe('cma-palm-beside-hardest-boxes')
+    stronger = probe('cma-palm-beside-hardest-boxes-torque-0.05')
+    for task in (corner, stronger):
+        randomization = task.randomization
+        assert (randomization.scale.lower, randomization.scale.upper) == (1.75, 2.0)
+        assert (randomization.mass.lower, randomization.mass.upper) == (1.35, 1.5)
+        assert (randomization.friction.lower, randomization.friction.upper) == (0.025, 0.05)
+        assert randomization.position == pinned.randomization.position
+    assert corner.replace(randomization=pinned.randomization) == pinned
+    bound = stronger.policy.torque.values[0]
+    assert (bound.lower, bound.upper) == (-0.05, 0.05)
+    assert stronger.policy.torque != pinned.policy.torque
+    assert stronger.replace(randomization=pinned.randomization, policy=pinned.policy,
+                            torque_penalty=pinned.torque_penalty) == pinned
 
 
 def test_unseen_worlds_are_disjoint_from_training_and_nested():

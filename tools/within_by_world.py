@@ -9,6 +9,9 @@ worlds, which `core.experiments.measures.unseen_world_states` draws again from t
 the task's ranges. Per configuration, the unseen worlds of its seeds are pooled and split by the
 quantity (core.sim.worlds.QUANTITIES: position_x, position_y, orientation, friction, scale,
 mass) into the bands given; each band gets its worlds and its share within the tolerance.
+The derived quantity turn_friction is the box's friction times its mass times its scale, as a
+factor of the nominal box's: the friction torque with which the plane resists turning the box
+about the vertical grows with each of the three.
 """
 
 import argparse
@@ -22,14 +25,24 @@ from hand_codesign.core.task import load_task
 import numpy as np
 
 
+TURN_FRICTION = 'turn_friction'
+
+
+def world_quantity(world, quantity, nominal_friction):
+    """Return one world's value of a quantity of QUANTITIES or of TURN_FRICTION."""
+    if quantity == TURN_FRICTION:
+        friction = (nominal_friction + world.friction_delta) / nominal_friction
+        return friction * world.mass_factor * world.scale
+    return world_values(world)[QUANTITIES.index(quantity)]
+
+
 def pooled_worlds(out, configuration, records, quantity, kind):
     """Return (quantity values, errors) of a configuration's unseen worlds over its seeds."""
     task = load_task(f'{out}/tasks/{configuration.key}.yaml')
-    column = QUANTITIES.index(quantity)
     values, errors = [], []
     for record in records:
         worlds = unseen_world_states(task.replace(seed=record['seed']), record['unseen_worlds'])
-        values += [world_values(world)[column] for world in worlds]
+        values += [world_quantity(world, quantity, task.object_spec.friction) for world in worlds]
         errors += record['worlds']['errors'][kind]
     return np.array(values), np.array(errors)
 
@@ -38,7 +51,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('out', help='campaign folder')
     parser.add_argument('experiment', choices=sorted(EXPERIMENTS))
-    parser.add_argument('--quantity', default='scale', choices=QUANTITIES)
+    parser.add_argument('--quantity', default='scale', choices=QUANTITIES + (TURN_FRICTION,))
     parser.add_argument('--bands', type=float, nargs='+', default=[0.5, 0.75, 1, 1.25, 1.5, 2])
     parser.add_argument('--seeds', type=parse_seeds, default='5',
                         help='N (1 to N), A-B or A,B,...')

@@ -37,7 +37,8 @@ each of these two presets CMA-MAE also spans its archive by an outcome of the ro
 limit_rest, the share of worlds in which a design ends on a joint limit while touching the
 box, core.outcomes). `levers-task6` also runs levers on Task 6's paper hand (the palm beside
 the box, `cma-palm-beside-*`), among which the worst quarter of the worlds was chosen on
-tuning seeds 1 to 3 to lift its tail (issue 26).
+tuning seeds 1 to 3 to lift its tail (issue 26), and probes of it on the hardest boxes to
+turn alone.
 """
 
 import dataclasses
@@ -226,6 +227,26 @@ def _palm_beside_lever_configurations():
                  for name, options in variants)
 
 
+def _palm_beside_probe_configurations():
+    """
+    Return probes, not presets: Task 6's paper hand trained and measured on the hardest boxes.
+
+    At Table I's budget the designs fail in the worlds whose box the plane holds hardest
+    against a turn: large, heavy and of high friction at once (the friction torque grows with
+    each). The hardest corner of Table I's ranges (scale 1.75 to 2, mass 1.35 to 1.5 times,
+    friction +0.025 to +0.05), trained and measured there alone, shows whether the hand can
+    turn those boxes at all within Table I's torque bound; and, beyond Table I, with five
+    times that bound, whether the fingers' strength is what stops it.
+    """
+    corner = (('randomization.scale', (1.75, 2.0)), ('randomization.mass', (1.35, 1.5)),
+              ('randomization.friction', (0.025, 0.05)))
+    stronger = (('policy.torque.bounds', (-0.05, 0.05)), ('torque_penalty.threshold', 0.04))
+    return (Configuration('cma-palm-beside-hardest-boxes', 'task6_palm_beside.yaml', 'cma',
+                          LEVER_WORLDS, 'torque', corner),
+            Configuration('cma-palm-beside-hardest-boxes-torque-0.05', 'task6_palm_beside.yaml',
+                          'cma', LEVER_WORLDS, 'torque', corner + stronger))
+
+
 def _lever_budgets(paper_worlds):
     """Return issue 12's budgets: 40 x 40 on 16 worlds, and Table I's, each over 5 seeds."""
     return {'smoke': Budget('smoke', 4, 8, 100, 1, world_states=4),
@@ -296,11 +317,12 @@ EXPERIMENTS = {
         'measured on the smaller half of the boxes alone; and the pinned hand (the palm '
         'beside the box) alone, on the worst quarter of its worlds, on worlds resampled '
         'each generation, both, with an initial step of 0.2, and its palm 7 or 8.5 cm from '
-        'the box',
+        'the box; and, as probes, that hand trained and measured on the hardest boxes to turn '
+        "(large, heavy, of high friction), with Table I's torque bound and five times it",
         _lever_configurations('task6.yaml')
         + _preset_lever_configurations('task6_diagonal.yaml', 'diagonal')
         + _diagonal_hand_configurations() + (_palm_beside_configuration('task6'),)
-        + _palm_beside_lever_configurations(),
+        + _palm_beside_lever_configurations() + _palm_beside_probe_configurations(),
         ORIENTATION_01,
         _lever_budgets(128),
         convergence=True, beyond_paper=True),
