@@ -15,13 +15,14 @@ about the vertical grows with each of the three.
 """
 
 import argparse
+import sys
 
 from hand_codesign.analysis.campaign import load_measures
 from hand_codesign.core.experiments.catalog import EXPERIMENTS, parse_seeds
 from hand_codesign.core.experiments.measures import shares_in_bands, unseen_world_states
 from hand_codesign.core.experiments.robustness import world_values
 from hand_codesign.core.sim.worlds import QUANTITIES
-from hand_codesign.core.task import load_task
+from hand_codesign.core.task import load_task, TaskError
 import numpy as np
 
 
@@ -63,11 +64,11 @@ def main():
           + ' | '.join(f'[{low:g}, {high:g})' for low, high in zip(edges, edges[1:])))
     measured = load_measures(arguments.out, experiment, arguments.seeds)
     for configuration in experiment.configurations:
+        if not measured[configuration.key]:
+            continue
         values, errors = pooled_worlds(arguments.out, configuration,
                                        measured[configuration.key], arguments.quantity,
                                        tolerance.kind)
-        if not len(errors):
-            continue
         cells = [f'{100 * share:3.0f} % of {worlds:4d}' if worlds else f'  - % of {worlds:4d}'
                  for _, _, worlds, share in shares_in_bands(values, errors < tolerance.limit,
                                                             edges)]
@@ -75,4 +76,7 @@ def main():
 
 
 if __name__ == '__main__':
-    main()
+    try:
+        main()
+    except TaskError as error:  # a campaign folder without its configuration's task file
+        sys.exit(f'within_by_world: {error}')
