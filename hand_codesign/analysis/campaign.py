@@ -275,7 +275,7 @@ def markdown_table(rows, tolerance, first='configuration', also=()):
         lines.append(
             f'| {row[first]} | {row["policy"]} | {row["algorithm"]} | {row["world_states"]} '
             f'| {row["seeds"]} | {row["unseen_worlds"]} | '
-            + ''.join(f'{percent(pooled)} | {seed_percents(by_seed)} | '
+            + ''.join(f'{within_percent(pooled)} | {seed_percents(by_seed)} | '
                       for pooled, by_seed in shares)
             + f'{error_text(row["median"], tolerance)} | {error_text(row["p90"], tolerance)} | '
             f'{error_text(row["initial_median"], tolerance)} | '
@@ -285,9 +285,19 @@ def markdown_table(rows, tolerance, first='configuration', also=()):
     return '\n'.join(lines) + '\n'
 
 
+def within_percent(share):
+    """
+    Return a share within tolerance as the tables write it, e.g. '89.6 %'.
+
+    One decimal: a share of 1,000 worlds is exact to it, and a share below a target (89.6 %
+    against 90 %) must not read as reaching it.
+    """
+    return f'{100 * share:.1f} %'
+
+
 def seed_percents(shares):
-    """Return shares by seed as the tables write them, e.g. '19 37 32'."""
-    return ' '.join(f'{100 * share:.0f}' for share in shares)
+    """Return shares within tolerance by seed as the tables write them, e.g. '19.2 37.0'."""
+    return ' '.join(f'{100 * share:.1f}' for share in shares)
 
 
 def plot_errors(path, groups, tolerance, title, kinds=None):
