@@ -60,9 +60,13 @@ def main():
     experiment = EXPERIMENTS[arguments.experiment]
     tolerance = experiment.tolerance
     edges = arguments.bands
+    measured = load_measures(arguments.out, experiment, arguments.seeds)
+    if not any(measured.values()):
+        sys.exit(f'within_by_world: {arguments.out}: no measures of {experiment.name} for these '
+                 f'seeds (expected measures/<configuration>-seed<N>.json, written by '
+                 f'`hand-codesign reproduce {experiment.name}`)')
     print(f'share within ({tolerance.describe()}) by {arguments.quantity}: '
           + ' | '.join(f'[{low:g}, {high:g})' for low, high in zip(edges, edges[1:])))
-    measured = load_measures(arguments.out, experiment, arguments.seeds)
     for configuration in experiment.configurations:
         if not measured[configuration.key]:
             continue
