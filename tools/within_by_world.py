@@ -67,6 +67,7 @@ def main():
                  f'`hand-codesign reproduce {experiment.name}`)')
     print(f'share within ({tolerance.describe()}) by {arguments.quantity}: '
           + ' | '.join(f'[{low:g}, {high:g})' for low, high in zip(edges, edges[1:])))
+    width = max(len(key) for key, seeds in measured.items() if seeds)
     for configuration in experiment.configurations:
         if not measured[configuration.key]:
             continue
@@ -76,7 +77,7 @@ def main():
         cells = [f'{100 * share:3.0f} % of {worlds:4d}' if worlds else f'  - % of {worlds:4d}'
                  for _, _, worlds, share in shares_in_bands(values, errors < tolerance.limit,
                                                             edges)]
-        print(f'{configuration.key:24s} ' + ' | '.join(cells))
+        print(f'{configuration.key:{width}s} ' + ' | '.join(cells))
 
 
 if __name__ == '__main__':
