@@ -9,7 +9,7 @@ import argparse
 import importlib
 import sys
 
-from hand_codesign.errors import UserError
+from hand_codesign.errors import closed_stdout_status, UserError
 from hand_codesign.version import version_text
 
 # verb -> (module, function, one-line help); the function takes the parsed arguments.
@@ -241,6 +241,8 @@ def main(argv=None):
     except KeyboardInterrupt:
         print(f'hand-codesign {arguments.verb}: interrupted', file=sys.stderr)
         return 130
+    except BrokenPipeError as error:  # `hand-codesign ... | head`
+        return closed_stdout_status(error)
 
 
 if __name__ == '__main__':

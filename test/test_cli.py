@@ -1,6 +1,7 @@
 """The `hand-codesign` command: its verbs, and bad flags answered with one clear line."""
 
 import importlib.metadata
+import os
 import pathlib
 import subprocess
 import sys
@@ -134,3 +135,29 @@ def test_version_names_the_package_version():
         commit = subprocess.run(['git', 'rev-parse', '--short=7', 'HEAD'], cwd=ROOT,
                                 capture_output=True, text=True, check=True).stdout.strip()
         assert f'(commit {commit}' in output
+
+
+def run_with_stdout_unread(command):
+    """Run a command whose stdout is a pipe that nobody reads any more (`command | head`)."""
+    reading_end, writing_end = os.pipe()
+    os.close(reading_end)
+    try:
+        return subprocess.run(command, stdout=writing_end, stderr=subprocess.PIPE, text=True,
+                              timeout=120)
+    finally:
+        os.close(writing_end)
+
+
+def test_a_reader_that_stops_reading_ends_the_verb_quietly():
+    result = run_with_stdout_unread([sys.executable, '-m', 'hand_codesign.cli', 'reproduce',
+                                     '--list'])
+    assert result.returncode == 141 and result.stderr == ''
+
+
+def test_a_broken_pipe_that_is_not_stdout_is_still_an_error():
+    # stdout is read to the end here, so the pipe that broke must be another one
+    result = subprocess.run(
+        [sys.executable, '-c', 'from hand_codesign.errors import closed_stdout_status; '
+                               'closed_stdout_status(BrokenPipeError("to a child"))'],
+        capture_output=True, text=True, timeout=120)
+    assert result.returncode == 1 and 'BrokenPipeError: to a child' in result.stderr

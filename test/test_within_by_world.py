@@ -1,5 +1,6 @@
 """tools/within_by_world.py, called as RESULTS calls it, on a committed campaign's measures."""
 
+import os
 import pathlib
 import subprocess
 import sys
@@ -29,3 +30,15 @@ def test_the_committed_rerun_gives_the_bands_results_cites():
                if line.startswith('cma-diagonal-fingers-60mm '))
     assert row.split('|')[0].split()[1:] == ['16', '%', 'of', '491']
     assert [cell.split()[0] for cell in row.split('|')[1:]] == ['40', '56', '43']
+
+
+def test_piped_into_head_it_ends_quietly():
+    reading_end, writing_end = os.pipe()
+    os.close(reading_end)  # a reader that has already taken what it wanted
+    try:
+        result = subprocess.run([sys.executable, str(TOOL), 'docs/results/levers-task5-reduced',
+                                 'levers-task5', '--seeds', '5'], stdout=writing_end,
+                                stderr=subprocess.PIPE, text=True, timeout=300, cwd=ROOT)
+    finally:
+        os.close(writing_end)
+    assert result.returncode == 141 and result.stderr == ''

@@ -23,6 +23,7 @@ from hand_codesign.core.experiments.measures import shares_in_bands, unseen_worl
 from hand_codesign.core.experiments.robustness import world_values
 from hand_codesign.core.sim.worlds import QUANTITIES
 from hand_codesign.core.task import load_task, TaskError
+from hand_codesign.errors import closed_stdout_status
 import numpy as np
 
 
@@ -85,3 +86,5 @@ if __name__ == '__main__':
         main()
     except TaskError as error:  # a campaign folder without its configuration's task file
         sys.exit(f'within_by_world: {error}')
+    except BrokenPipeError as error:  # `python tools/within_by_world.py ... | head`
+        sys.exit(closed_stdout_status(error))
