@@ -234,7 +234,9 @@ def main(argv=None):
     arguments = build_parser().parse_args(argv)
     try:
         command = load_verb(arguments.verb)
-        return command(arguments) or 0
+        status = command(arguments) or 0
+        sys.stdout.flush()  # here, not at exit, where a reader gone would not be caught
+        return status
     except UserError as error:
         print(f'hand-codesign {arguments.verb}: error: {error}', file=sys.stderr)
         return 2

@@ -79,6 +79,7 @@ def main():
                  for _, _, worlds, share in shares_in_bands(values, errors < tolerance.limit,
                                                             edges)]
         print(f'{configuration.key:{width}s} ' + ' | '.join(cells))
+    sys.stdout.flush()  # here, not at exit, where a reader gone would not be caught
 
 
 if __name__ == '__main__':
