@@ -52,3 +52,11 @@ def test_training_worlds_are_the_runs_own_and_the_table_holds_both_sets(real_run
         share = summarize(measures, Tolerance(axis, 0.005)).within
         assert float(rows[0][f'within_{axis}']) == share
     assert f'| training, {trained} |' in out.with_suffix('.md').read_text()
+
+
+def test_a_path_that_is_not_a_bag_gets_one_line(tmp_path):
+    completed = subprocess.run([sys.executable, str(TOOL), str(tmp_path)], capture_output=True,
+                               text=True, timeout=300)
+    assert completed.returncode != 0 and completed.stdout == ''
+    lines = completed.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f'final_offsets: {tmp_path}: ')

@@ -16,11 +16,14 @@ estimates pessimistic.
 
 import argparse
 import pathlib
+import sys
 
 from hand_codesign.analysis import campaign, records
 from hand_codesign.core.experiments.catalog import EXPERIMENTS, run_key, training_worlds
 from hand_codesign.core.run.preview import run_budget
 from hand_codesign.core.run.runs import load_run_task
+from hand_codesign.core.task import TaskError
+from hand_codesign.errors import UserError
 import numpy as np
 
 
@@ -68,21 +71,31 @@ def main():
     parser.add_argument('--host-cores', type=int, default=8)
     arguments = parser.parse_args()
     experiment = EXPERIMENTS[arguments.experiment]
+    if arguments.budget not in experiment.budgets:
+        parser.error(f'--budget: {experiment.name} has no budget "{arguments.budget}"; '
+                     f'expected one of {", ".join(experiment.budgets)}')
     budget = experiment.budget(arguments.budget)
     seeds = arguments.seeds or budget.seeds
     runs_dir = pathlib.Path(arguments.folder) / 'runs'
+    tasks_dir = pathlib.Path(arguments.folder) / 'tasks'
+    if not (runs_dir.is_dir() and tasks_dir.is_dir()):
+        sys.exit(f'campaign_rates: {arguments.folder}: not a campaign folder (expected runs/ and '
+                 f'tasks/ in it, written by `hand-codesign reproduce {experiment.name}`)')
     total = 0.0
-    print(f'{"configuration":24} {"steps/s here":>16} {"hours at " + budget.name:>16}')
+    width = max(len(configuration.key) for configuration in experiment.configurations)
+    print(f'{"configuration":{width}} {"steps/s here":>16} {"hours at " + budget.name:>16}')
     for configuration in experiment.configurations:
+        if not (tasks_dir / f'{configuration.key}.yaml').exists():
+            continue  # a campaign of some configurations (`reproduce --only`)
         task = budget_task(arguments.folder, configuration, budget)
         steps, seconds = measured_rate(runs_dir, configuration, task.time_step)
         if not seconds:
-            print(f'{configuration.key:24} {"no finished run":>16}')
+            print(f'{configuration.key:{width}} {"no finished run":>16}')
             continue
         rate = steps / seconds
         needed = run_budget(task)['physics_steps'] * seeds / rate
         total += needed
-        print(f'{configuration.key:24} {rate:16.0f} {needed / 3600:16.2f}')
+        print(f'{configuration.key:{width}} {rate:16.0f} {needed / 3600:16.2f}')
     hosts = total * arguments.cores / (arguments.hosts * arguments.host_cores)
     print(f'{experiment.name} at {budget.describe()}, {seeds} seeds, example run '
           f'{run_key(experiment.configurations[0], 1)}:')
@@ -91,4 +104,7 @@ def main():
 
 
 if __name__ == '__main__':
-    main()
+    try:
+        main()
+    except (TaskError, UserError) as error:  # not a campaign folder, or a run without its bag
+        sys.exit(f'campaign_rates: {error}')

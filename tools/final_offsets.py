@@ -20,10 +20,12 @@ generalizing. --table OUT writes OUT.csv and OUT.md, a row per bag and set of wo
 import argparse
 import csv
 import pathlib
+import sys
 
 from hand_codesign.analysis.campaign import final_design
 from hand_codesign.core.experiments.measures import measure_worlds, unseen_world_states
 from hand_codesign.core.sim.worlds import world_states
+from hand_codesign.errors import UserError
 import numpy as np
 
 TOLERANCE = 0.005  # m
@@ -108,4 +110,7 @@ def main():
 
 
 if __name__ == '__main__':
-    main()
+    try:
+        main()
+    except UserError as error:  # a path that is not a bag of the recorder
+        sys.exit(f'final_offsets: {error}')
