@@ -162,13 +162,13 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
     assert catalog.training_worlds(by_key['cma'], levers.budget('paper')) == 64
 
 
-def test_task6_paper_hand_levers_change_one_thing_each():
+def test_task6_paper_hand_levers_change_one_thing_each_or_two_together():
     # the levers on Task 6's paper hand (the palm beside the box), chosen on tuning seeds
     text = (catalog.pinned_dir() / 'task6_palm_beside.yaml').read_text()
     pinned = parse_task(text).replace(source_text='')
     by_key = {c.key: c for c in catalog.EXPERIMENTS['levers-task6'].configurations
               if c.key.startswith('cma-palm-beside-') and 'hardest' not in c.key}
-    assert len(by_key) == 6 and all(c.preset == 'task6_palm_beside.yaml'
+    assert len(by_key) == 7 and all(c.preset == 'task6_palm_beside.yaml'
                                     for c in by_key.values())
 
     def lever(key):
@@ -191,6 +191,11 @@ def test_task6_paper_hand_levers_change_one_thing_each():
         moved = lever(key)
         np.testing.assert_allclose(moved.hand.base_position, (-distance, 0.0, 0.015))
         assert moved.replace(hand=pinned.hand) == pinned
+    # the two levers chosen together: the closer palm and the worst quarter, nothing else
+    together = lever('cma-palm-beside-palm-70mm-worst25')
+    assert together.replace(hand=pinned.hand, worlds=pinned.worlds) == pinned
+    assert together.hand == lever('cma-palm-beside-palm-70mm').hand
+    assert together.worlds == worst.worlds
 
 
 def test_task6_hardest_boxes_probes_narrow_the_worlds_to_their_corner():
