@@ -319,9 +319,10 @@ EXPERIMENTS = {
         'its torque bound, its fingers placed closer to the box; and that hand trained and '
         'measured on the smaller half of the boxes alone; and the pinned hand (the palm '
         'beside the box) alone, on the worst quarter of its worlds, on worlds resampled '
-        'each generation, both, with an initial step of 0.2, and its palm 7 or 8.5 cm from '
-        'the box; and, as probes, that hand trained and measured on the hardest boxes to turn '
-        "(large, heavy, of high friction), with Table I's torque bound and five times it",
+        'each generation, both, with an initial step of 0.2, its palm 7 or 8.5 cm from '
+        'the box, and its palm 7 cm from the box on the worst quarter; and, as probes, that '
+        'hand trained and measured on the hardest boxes to turn (large, heavy, of high '
+        "friction), with Table I's torque bound and five times it",
         _lever_configurations('task6.yaml')
         + _preset_lever_configurations('task6_diagonal.yaml', 'diagonal')
         + _diagonal_hand_configurations() + (_palm_beside_configuration('task6'),)
