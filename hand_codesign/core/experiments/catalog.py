@@ -217,8 +217,9 @@ def _palm_beside_lever_configurations():
     placed 1 cm further from the box or 0.5 cm closer (its face then 3 mm beyond the
     farthest corner of the largest box turned to the goal; the fixed hand's placement is our
     reading of Table I, as are its axes). Chosen on tuning seeds 1 to 3 (issue 26). After
-    the choice, the worst quarter with the closer palm, the pairing of the three best levers
-    not tried together yet, on the same seeds: it did worse than either (docs/RESULTS.md).
+    the choice, the best lever (the worst quarter) with the third (the closer palm; the
+    second, resampled worlds, is paired above), on the same seeds: it did worse than either
+    (docs/RESULTS.md).
     """
     palm_70mm = (('hand.base_position', (-0.07, 0.0, 0.015)),)
     variants = (('worst25', WORST_QUARTER), ('resample', RESAMPLED),
