@@ -53,10 +53,9 @@ def measured_rate(runs_dir, configuration, time_step):
     return steps, seconds
 
 
-def budget_task(folder, configuration, budget):
-    """Return the task of one run of the configuration at `budget`."""
-    return load_run_task(pathlib.Path(folder) / 'tasks' / f'{configuration.key}.yaml', 1,
-                         budget.iterations, budget.population,
+def budget_task(task_file, configuration, budget):
+    """Return the task of one run of the configuration at `budget`, from its campaign file."""
+    return load_run_task(task_file, 1, budget.iterations, budget.population,
                          training_worlds(configuration, budget))
 
 
@@ -85,9 +84,10 @@ def main():
     width = max(len(configuration.key) for configuration in experiment.configurations)
     print(f'{"configuration":{width}} {"steps/s here":>16} {"hours at " + budget.name:>16}')
     for configuration in experiment.configurations:
-        if not (tasks_dir / f'{configuration.key}.yaml').exists():
+        task_file = tasks_dir / f'{configuration.key}.yaml'
+        if not task_file.exists():
             continue  # a campaign of some configurations (`reproduce --only`)
-        task = budget_task(arguments.folder, configuration, budget)
+        task = budget_task(task_file, configuration, budget)
         steps, seconds = measured_rate(runs_dir, configuration, task.time_step)
         if not seconds:
             print(f'{configuration.key:{width}} {"no finished run":>16}')
