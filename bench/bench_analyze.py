@@ -20,13 +20,13 @@ import sys
 import tempfile
 import time
 
-from hand_codesign.analysis.bag import read_run
+from hand_codesign.bag.reader import read_run
+from hand_codesign.bag.writer import BagWriter
 from hand_codesign.cli import main as cli_main
 from hand_codesign.core.run.runs import run_task
 from hand_codesign.core.task import load_task
 from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.ros import topics
-from hand_codesign.ros.mcap_writer import BagWriter
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import EvaluatorStatus

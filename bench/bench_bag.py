@@ -29,13 +29,13 @@ import sys
 import tempfile
 import time
 
-from hand_codesign.analysis import bag
-from hand_codesign.analysis import cdr
+from hand_codesign.bag import cdr
+from hand_codesign.bag import reader as bag
+from hand_codesign.bag.writer import BagWriter
 from hand_codesign.core import genome_spec
 from hand_codesign.core import load_task
 from hand_codesign.core import objective_names
 from hand_codesign.ros import topics
-from hand_codesign.ros.mcap_writer import BagWriter
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import GenerationSummary

@@ -28,8 +28,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / 'tools'))
 
 import build_pybullet  # noqa: E402, I100: a tool script, not a package
-from hand_codesign.analysis.bag import read_run  # noqa: E402, I100
 from hand_codesign.analysis.records import stepping_rate  # noqa: E402
+from hand_codesign.bag.reader import read_run  # noqa: E402, I100
 import numpy as np  # noqa: E402
 
 REFERENCE = 'c411ce1'

@@ -89,7 +89,7 @@ def chosen_genomes(arguments):
     if arguments.bag is None:
         from bench_core import candidates
         return np.array(candidates(task, arguments.candidates, seed=1))
-    from hand_codesign.analysis.bag import read_run
+    from hand_codesign.bag.reader import read_run
     record = read_run(arguments.bag)
     evaluations = record.evaluations.select((record.evaluations['status'] == 0)
                                             & (record.evaluations['simulated_time'] > 0))

@@ -32,7 +32,7 @@ import tempfile
 import threading
 import time
 
-from hand_codesign.analysis.bag import read_run
+from hand_codesign.bag.reader import read_run
 from hand_codesign.ros.runner import claimed_domain
 import psutil
 

@@ -58,7 +58,7 @@ import sys
 import tempfile
 import time
 
-from hand_codesign.analysis.bag import read_run
+from hand_codesign.bag.reader import read_run
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

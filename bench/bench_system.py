@@ -42,9 +42,9 @@ import tempfile
 import time
 
 from bench_core import bare_loop
-from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.records import evaluation_rows
 from hand_codesign.analysis.records import stepping_rate
+from hand_codesign.bag.reader import read_run
 from hand_codesign.core.evaluate import shared_simulator
 from hand_codesign.core.sim.objectives import goal_schedule
 from hand_codesign.core.task import load_task

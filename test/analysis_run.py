@@ -13,8 +13,8 @@ import pathlib
 import subprocess
 import sys
 
+from hand_codesign.bag.writer import BagWriter
 from hand_codesign.ros import topics
-from hand_codesign.ros.mcap_writer import BagWriter
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 import pytest

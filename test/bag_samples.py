@@ -8,10 +8,10 @@ import threading
 import time
 
 from geometry_msgs.msg import PoseStamped
-from hand_codesign.analysis import cdr
+from hand_codesign.bag import cdr
+from hand_codesign.bag.writer import BagWriter
+from hand_codesign.bag.writer import message_definition
 from hand_codesign.ros import topics
-from hand_codesign.ros.mcap_writer import BagWriter
-from hand_codesign.ros.mcap_writer import message_definition
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import EvaluatorStatus

@@ -8,8 +8,11 @@ import pytest
 PACKAGE = pathlib.Path(__file__).resolve().parents[1] / 'hand_codesign'
 # room -> modules it must never import (at any depth, also inside functions)
 FORBIDDEN = {
-    'core': ('rclpy', 'hand_codesign_msgs', 'hand_codesign.ros', 'hand_codesign.analysis',
-             'hand_codesign.commands', 'hand_codesign.cli'),
+    'core': ('rclpy', 'hand_codesign_msgs', 'hand_codesign.bag', 'hand_codesign.ros',
+             'hand_codesign.analysis', 'hand_codesign.commands', 'hand_codesign.cli'),
+    # the bag format, readable without ROS by any tool: above core, below ros and analysis
+    'bag': ('rclpy', 'hand_codesign_msgs', 'hand_codesign.ros', 'hand_codesign.analysis',
+            'hand_codesign.commands', 'hand_codesign.cli'),
     'ros': ('hand_codesign.analysis', 'hand_codesign.commands', 'hand_codesign.cli'),
     'analysis': ('rclpy', 'hand_codesign.ros', 'hand_codesign.commands', 'hand_codesign.cli'),
 }

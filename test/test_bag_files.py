@@ -1,5 +1,5 @@
 """
-Bags that outlive their recorder (ros.bag_files, `hand-codesign recover`), without processes.
+Bags that outlive their recorder (bag.recovery, `hand-codesign recover`), without processes.
 
 A killed recorder is a writer whose file stops after its last flush. What a user checks:
 after `recover` independent readers (rosbags, mcap's indexed reader) take the bag, every
@@ -15,11 +15,15 @@ from bag_samples import dds_bytes
 from bag_samples import interleaved
 from bag_samples import rosbag2_record
 from bag_samples import sample_messages
-from hand_codesign.analysis.bag import read_run
+from hand_codesign.bag.files import bag_files
+from hand_codesign.bag.reader import read_run
+from hand_codesign.bag.reader import read_topics
+from hand_codesign.bag.recovery import continue_bag
+from hand_codesign.bag.writer import BagWriter
 from hand_codesign.cli import main
+from hand_codesign.core.contract import CANDIDATE_TYPE
+from hand_codesign.core.contract import CANDIDATES
 from hand_codesign.ros import topics
-from hand_codesign.ros.bag_files import continue_bag
-from hand_codesign.ros.mcap_writer import BagWriter
 from mcap.reader import make_reader
 import pytest
 from rosbags.rosbag2 import Reader
@@ -155,3 +159,26 @@ def test_file_cut_off_before_its_header_becomes_an_empty_bag(tmp_path, cut):
     assert done.returncode == 0 and '0 messages kept' in done.stdout, done.stderr
     with Reader(folder) as reader:
         assert reader.message_count == 0
+
+
+def test_every_reader_takes_a_bag_folder_in_the_order_its_files_were_written(tmp_path):
+    # past run_9.mcap an order by name would put run_10.mcap before run_2.mcap
+    folder = tmp_path / 'run'
+    messages, wire = wire_messages()
+    candidates = [data for topic, data in wire if topic == '/' + CANDIDATES][:12]
+    for index, data in enumerate(candidates):
+        writer = BagWriter(folder, file_index=index)
+        writer.add_topic('/' + CANDIDATES, CANDIDATE_TYPE, [topics.QOS[CANDIDATES]])
+        writer.write('/' + CANDIDATES, data, log_time=1_000_000)   # one time: files decide
+        writer.close()
+    written = [f'run_{index}.mcap' for index in range(12)]
+    assert [path.name for path in bag_files(folder)] == written
+    metadata = yaml.safe_load((folder / 'metadata.yaml').read_text())
+    assert metadata['rosbag2_bagfile_information']['relative_file_paths'] == written
+    expected = [message.candidate_id for message in messages[CANDIDATES][:12]]
+    for with_metadata in (True, False):
+        if not with_metadata:
+            (folder / 'metadata.yaml').unlink()
+        tables, _ = read_topics(folder, [CANDIDATE_TYPE])
+        assert list(tables[CANDIDATE_TYPE]['candidate_id']) == expected
+    assert continue_bag(folder)[0] == 12

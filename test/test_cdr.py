@@ -5,9 +5,9 @@ from diagnostic_msgs.msg import DiagnosticArray
 from diagnostic_msgs.msg import DiagnosticStatus
 from diagnostic_msgs.msg import KeyValue
 from geometry_msgs.msg import PoseWithCovarianceStamped
-from hand_codesign.analysis import cdr
+from hand_codesign.bag import cdr
+from hand_codesign.bag.writer import message_definition
 from hand_codesign.ros import topics
-from hand_codesign.ros.mcap_writer import message_definition
 import numpy as np
 import pytest
 from rclpy.serialization import serialize_message

@@ -71,3 +71,14 @@ def test_unknown_name_is_an_attribute_error():
             print(error)
     """)
     assert printed == "module 'hand_codesign.core' has no attribute 'no_such_name'"
+
+
+def test_the_bag_room_reads_writes_and_mends_bags_without_rclpy_or_pybullet():
+    printed = run_python("""
+        import sys
+        import hand_codesign.bag.reader
+        import hand_codesign.bag.recovery
+        import hand_codesign.bag.writer
+        print('rclpy' in sys.modules, 'pybullet' in sys.modules)
+    """)
+    assert printed == 'False False'

@@ -2,10 +2,10 @@
 
 import math
 
-from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.export import load_export
 from hand_codesign.analysis.export import resimulate
 from hand_codesign.analysis.records import recorded_design
+from hand_codesign.bag.reader import read_run
 from hand_codesign.cli import main
 from hand_codesign.core.sim.hand import build_hand
 from hand_codesign.core.sim.hand import hand_model

@@ -5,7 +5,7 @@ The session's real run is signed: its RunInfo announces the Ed25519 key its summ
 signed with (core.run.signing). A forger on the domain copies the run id from the latched RunInfo
 and publishes six summaries claiming objectives of 0 after the run's last one, and publishes a
 genuine summary again; here they are appended to copies of the bag as the recorder would have
-recorded them. Every reader (analysis.bag.read_run: analyze, resume, replay, reproduce) leaves
+recorded them. Every reader (bag.reader.read_run: analyze, resume, replay, reproduce) leaves
 them out and counts them; analyze says so.
 """
 
@@ -15,8 +15,8 @@ from analysis_run import copy_bag
 from analysis_run import decoded_messages
 from analysis_run import raw_messages
 from analysis_run import run_cli
-from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.resume import resume_point
+from hand_codesign.bag.reader import read_run
 from hand_codesign.core.run.signing import summary_valid
 from hand_codesign.core.run.signing import SummaryKey
 from hand_codesign.ros import topics

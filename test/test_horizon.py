@@ -10,6 +10,7 @@ from bag_samples import interleaved
 from bag_samples import sample_messages
 from hand_codesign.analysis import records
 from hand_codesign.analysis.resume import resume_point
+from hand_codesign.bag.writer import message_definition
 from hand_codesign.cli import main
 from hand_codesign.core import TaskError
 from hand_codesign.core.evaluate import evaluate
@@ -20,7 +21,6 @@ from hand_codesign.core.search.search import Search
 from hand_codesign.core.sim.objectives import goal_schedule
 from hand_codesign.core.task.variant import Variant
 from hand_codesign.ros import topics
-from hand_codesign.ros.mcap_writer import message_definition
 from mcap_ros2.writer import Writer
 import numpy as np
 import pytest

@@ -7,11 +7,11 @@ from bag_samples import interleaved
 from bag_samples import rosbag2_record
 from bag_samples import sample_messages
 from bag_samples import write_bag
+from hand_codesign.bag.writer import BagWriteError
+from hand_codesign.bag.writer import BagWriter
+from hand_codesign.bag.writer import DefinitionError
+from hand_codesign.bag.writer import message_definition
 from hand_codesign.ros import topics
-from hand_codesign.ros.mcap_writer import BagWriteError
-from hand_codesign.ros.mcap_writer import BagWriter
-from hand_codesign.ros.mcap_writer import DefinitionError
-from hand_codesign.ros.mcap_writer import message_definition
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 import numpy as np

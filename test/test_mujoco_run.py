@@ -4,8 +4,8 @@ import json
 import pathlib
 
 from analysis_run import run_cli
-from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.export import load_export
+from hand_codesign.bag.reader import read_run
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.run.runs import engine_version
 from hand_codesign.core.sim.geometry import link_frames

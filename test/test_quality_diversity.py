@@ -13,7 +13,7 @@ from analysis_run import decoded_messages
 from analysis_run import run_cli
 from analysis_run import until_evaluation_of
 from hand_codesign.analysis import records
-from hand_codesign.analysis.bag import read_run
+from hand_codesign.bag.reader import read_run
 from hand_codesign.cli import main
 from hand_codesign.core import load_task
 from hand_codesign.core.evaluate import evaluate

@@ -12,8 +12,8 @@ from bag_samples import Process
 from bag_samples import ros_env
 from bag_samples import sample_messages
 import domain_coordinator
-from hand_codesign.analysis.bag import BagError
-from hand_codesign.analysis.bag import read_run
+from hand_codesign.bag.reader import BagError
+from hand_codesign.bag.reader import read_run
 from hand_codesign.core.contract import RECORDER_READY
 from hand_codesign.ros import topics
 from mcap.reader import make_reader

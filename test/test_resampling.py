@@ -8,12 +8,12 @@ import sys
 from analysis_run import copy_bag
 from analysis_run import run_cli
 from analysis_run import until_evaluation_of
-from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.records import best_candidate_id
 from hand_codesign.analysis.records import design_task
 from hand_codesign.analysis.records import open_run
 from hand_codesign.analysis.records import recorded_design
 from hand_codesign.analysis.resume import resume_point
+from hand_codesign.bag.reader import read_run
 from hand_codesign.cli import main
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.run.runs import load_run_task

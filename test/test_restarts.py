@@ -7,7 +7,7 @@ import pickle
 import subprocess
 import sys
 
-from hand_codesign.analysis.bag import read_run
+from hand_codesign.bag.reader import read_run
 from hand_codesign.cli import main
 from hand_codesign.core import load_task
 from hand_codesign.core.search.factory import make_optimizer

@@ -9,9 +9,9 @@ from analysis_run import decoded_messages
 from analysis_run import ROOT
 from analysis_run import run_cli
 from analysis_run import run_codesign
-from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.resume import recorded_evaluations
 from hand_codesign.analysis.resume import resume_point
+from hand_codesign.bag.reader import read_run
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.run.runs import load_run_task
 from hand_codesign.core.search.resume import extended_task

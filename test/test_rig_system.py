@@ -13,10 +13,10 @@ import pathlib
 import subprocess
 import sys
 
-from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.records import design_task, recorded_design, run_task_of
 from hand_codesign.analysis.rig_report import rig_comparison
 from hand_codesign.analysis.rig_traces import trial_traces
+from hand_codesign.bag.reader import read_run
 from hand_codesign.core import evaluate
 from hand_codesign.core.rig.trials import interpolation_tolerance
 from hand_codesign.core.sim.objectives import goal_schedule

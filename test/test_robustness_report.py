@@ -5,11 +5,11 @@ import csv
 from analysis_run import ROOT
 from analysis_run import run_codesign
 from analysis_run import TASK
-from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.records import recorded_design
 from hand_codesign.analysis.records import run_task_of
 from hand_codesign.analysis.records import structure_bests
 from hand_codesign.analysis.robustness_report import robustness_worlds
+from hand_codesign.bag.reader import read_run
 from hand_codesign.cli import main
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.run.runs import run_task

@@ -5,9 +5,9 @@ import pathlib
 import types
 
 from analysis_run import run_codesign
-from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.records import design_task
 from hand_codesign.analysis.records import recorded_design
+from hand_codesign.bag.reader import read_run
 from hand_codesign.cli import main
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.run.evaluation_jobs import candidate_task

@@ -25,7 +25,7 @@ import time
 
 from analysis_run import BUDGET
 from analysis_run import TASK
-from hand_codesign.analysis.bag import read_run
+from hand_codesign.bag.reader import read_run
 import psutil
 import pytest
 from rosbags.rosbag2 import Reader

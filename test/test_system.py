@@ -19,8 +19,8 @@ import sys
 import threading
 import time
 
-from hand_codesign.analysis.bag import read_run
 from hand_codesign.analysis.trust import trust_counts
+from hand_codesign.bag.reader import read_run
 from hand_codesign.core.run.signing import new_secret
 from hand_codesign.core.run.signing import RunKeys
 from hand_codesign.ros.runner import claimed_domain
@@ -446,9 +446,9 @@ def test_evaluator_keeps_its_heartbeat_while_it_evaluates(tmp_path):
 
 # what `ros2 topic echo /generation_summary` in the user's shell does: wait for a summary
 LISTENER = """
-import time
-import rclpy
 from hand_codesign.ros import topics
+import rclpy
+import time
 rclpy.init()
 node = rclpy.create_node('shell_listener')
 heard = []

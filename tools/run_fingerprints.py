@@ -11,7 +11,7 @@ real physics, a real bag):
 - ``task5-cma-mae``: Task 5 searched by quality diversity (``optimizer.algorithm: cma-mae``).
 
 Each prints one SHA-256 over the run's ``result.json`` and every GenerationSummary read back
-from its bag (``hand_codesign.analysis.bag.read_topics``), in recorded order. Left out, because
+from its bag (``hand_codesign.bag.reader.read_topics``), in recorded order. Left out, because
 they differ from one run of the same seed to the next: the run id (drawn fresh for each run)
 and everything holding it (the bag path, the signing key's public half), wall-clock stamps
 (``wall_time``, the bag's ``log_time`` and ``publish_time``, ``started``/``finished``/
@@ -31,7 +31,7 @@ import subprocess
 import sys
 import tempfile
 
-from hand_codesign.analysis.bag import read_topics
+from hand_codesign.bag.reader import read_topics
 import numpy as np
 import yaml
 

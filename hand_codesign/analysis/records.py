@@ -25,8 +25,8 @@ import json
 import pathlib
 import sys
 
-from hand_codesign.analysis.bag import BagError
-from hand_codesign.analysis.bag import read_run
+from hand_codesign.bag.reader import BagError
+from hand_codesign.bag.reader import read_run
 from hand_codesign.core.contract import STATUS_NAMES
 from hand_codesign.core.contract import STATUS_OK
 from hand_codesign.core.outcomes import Answer

@@ -9,7 +9,7 @@ evaluator itself scored it.
 
 from dataclasses import dataclass
 
-from hand_codesign.analysis.bag import read_topics
+from hand_codesign.bag.reader import read_topics
 from hand_codesign.core.contract import (OBJECT_POSE, RIG_TOPIC_TYPES, TRIAL_ENDED,
                                          TRIAL_FAILED, TRIAL_REQUESTS, TRIAL_START_COLLISION,
                                          TRIAL_STARTED, TRIAL_STATUS)

@@ -6,7 +6,7 @@ wrong signature, the audit evaluations (a second or third evaluator checking an 
 the evaluators it quarantined; each evaluator counts in its EvaluatorStatus the RunInfos and
 Candidates it ignored. The bag holds no secret key, so these counts are what it can report,
 beside the GenerationSummaries the reader left out because their Ed25519 signature failed
-(analysis.bag). Bags of runs before signing lack these fields and report nothing here.
+(bag.reader). Bags of runs before signing lack these fields and report nothing here.
 """
 
 from hand_codesign.analysis import records

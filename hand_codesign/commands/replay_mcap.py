@@ -3,7 +3,7 @@ One world's rollout of a recorded design as a ROS 2 MCAP that Foxglove plays bac
 
 The file is a ROS 2 bag of standard messages (profile ros2, ros2msg schemas with their
 dependencies, cdr messages, closed with its summary and footer), written like a run's bag by
-hand_codesign.ros.mcap_writer. Per frame of the animation (25 per simulated second):
+hand_codesign.bag.writer. Per frame of the animation (25 per simulated second):
 
 - contract.REPLAY_MARKERS, visualization_msgs/MarkerArray: the hand drawn from its simulated
   link frames with core.sim.geometry's shapes (the very shapes of the best_design topic), the
@@ -21,6 +21,8 @@ be kept equal to the first).
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped
 from hand_codesign.analysis.replay import rollout_poses
+from hand_codesign.bag.writer import BagWriteError
+from hand_codesign.bag.writer import BagWriter
 from hand_codesign.core import contract
 from hand_codesign.core.sim.geometry import GOAL_COLOUR
 from hand_codesign.core.sim.geometry import goal_poses
@@ -30,8 +32,6 @@ from hand_codesign.core.sim.worlds import object_state
 from hand_codesign.errors import UserError
 from hand_codesign.outputs import staged
 from hand_codesign.ros.conversions import markers_message
-from hand_codesign.ros.mcap_writer import BagWriteError
-from hand_codesign.ros.mcap_writer import BagWriter
 from hand_codesign.ros.topics import LOOP_QOS
 from rclpy.serialization import serialize_message
 

@@ -16,12 +16,12 @@ import sys
 import time
 
 import foxglove
+from hand_codesign.bag.metadata import MESSAGE_ENCODING
+from hand_codesign.bag.writer import message_definition
+from hand_codesign.bag.writer import SCHEMA_ENCODING
 from hand_codesign.core.contract import LIVE_READY
 from hand_codesign.errors import UserError
 from hand_codesign.ros import topics
-from hand_codesign.ros.bag_metadata import MESSAGE_ENCODING
-from hand_codesign.ros.mcap_writer import message_definition
-from hand_codesign.ros.mcap_writer import SCHEMA_ENCODING
 from hand_codesign.ros.node_main import run_node
 from hand_codesign.ros.parameters import declare_read_only
 from hand_codesign.ros.recording import recorder_qos

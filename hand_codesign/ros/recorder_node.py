@@ -4,7 +4,7 @@ The recorder node: writes every message of the co-design loop to a rosbag2-compa
 It subscribes to the loop's topics without decoding (raw CDR), losslessly (ros.recording has
 its QoS, parameters and bag), and writes every message as it arrives, flushed every
 ``flush_period`` s: a recorder killed with SIGKILL loses at most that, and one started with
-continue_bag continues its bag (ros.bag_files). SIGINT and SIGTERM stop it cleanly: it takes
+continue_bag continues its bag (bag.recovery). SIGINT and SIGTERM stop it cleanly: it takes
 what has arrived, then closes the bag. Once subscribed it logs contract.RECORDER_READY.
 """
 

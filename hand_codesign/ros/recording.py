@@ -9,11 +9,11 @@ dropped at the recorder.
 import datetime
 import pathlib
 
+from hand_codesign.bag.writer import BagWriteError
+from hand_codesign.bag.writer import BagWriter
+from hand_codesign.bag.writer import DefinitionError
+from hand_codesign.bag.writer import message_definition
 from hand_codesign.ros import topics
-from hand_codesign.ros.mcap_writer import BagWriteError
-from hand_codesign.ros.mcap_writer import BagWriter
-from hand_codesign.ros.mcap_writer import DefinitionError
-from hand_codesign.ros.mcap_writer import message_definition
 from rclpy.qos import HistoryPolicy
 from rclpy.qos import QoSProfile
 
@@ -29,7 +29,7 @@ PARAMETERS = {
     'flush_period': (1.0, 'Seconds between flushes of the chunk in progress to disk: at most '
                           'this much is lost if the recorder is killed with SIGKILL.', None),
     'continue_bag': (False, 'Continue the bag directory bag_path of a recorder that died: '
-                            'close its files (ros.bag_files), write the next file and skip '
+                            'close its files (bag.recovery), write the next file and skip '
                             'the messages the bag already holds.', None),
 }
 
@@ -81,11 +81,11 @@ def open_bag(settings):
             raise RecorderError(f'parameter continue_bag: bag_path {path} is not an existing '
                                 'bag directory')
         # imported here: only a restarted recorder reads its bag (mcap's readers, ~50 ms)
-        from hand_codesign.ros.bag_files import BagRecoveryError
-        from hand_codesign.ros.bag_files import continue_bag
+        from hand_codesign.bag.files import BagError
+        from hand_codesign.bag.recovery import continue_bag
         try:
             file_index, recorded, channels = continue_bag(path)
-        except BagRecoveryError as error:
+        except BagError as error:
             raise RecorderError(f'parameter continue_bag: {error}') from None
     try:
         writer = BagWriter(settings['bag_path'] or default_bag_path(), file_index=file_index,

@@ -111,7 +111,7 @@ def deliver(publishers, subscribers_expected, timeout=RETURN_WAIT):
     Return once every publisher's expected subscribers are there and acknowledged everything.
 
     The history of a publisher ends with its process: a recorder restarted after it died
-    (ros.runner, ros.bag_files) gets the messages it missed only from publishers that still
+    (ros.runner, bag.recovery) gets the messages it missed only from publishers that still
     exist, so a node that is done waits for it (at most timeout s) before it exits.
     """
     deadline = time.monotonic() + timeout

@@ -10,7 +10,7 @@ not MCAP, or an MCAP bag without hand_codesign topics raises ``BagError`` naming
 what was expected.
 
 Messages are decoded with decoders compiled from the schema text stored in the bag
-(``hand_codesign.analysis.cdr``, four to ten times faster than the libraries'), falling back
+(``hand_codesign.bag.cdr``, four to ten times faster than the libraries'), falling back
 to the rosbags typestore built from the same schema for anything those do not handle (e.g.
 big-endian CDR), and gathered per topic into column tables of numpy arrays.
 
@@ -25,7 +25,11 @@ import dataclasses
 import pathlib
 import struct
 
-from hand_codesign.analysis import cdr
+from hand_codesign.bag import cdr
+from hand_codesign.bag.files import bag_files
+from hand_codesign.bag.files import BagError
+from hand_codesign.bag.files import check_start
+from hand_codesign.bag.files import Records
 from hand_codesign.core.contract import CANDIDATE_TYPE
 from hand_codesign.core.contract import EVALUATION_TYPE
 from hand_codesign.core.contract import EVALUATOR_STATUS_TYPE
@@ -35,7 +39,6 @@ from hand_codesign.core.contract import MESSAGES_PACKAGE
 from hand_codesign.core.contract import RUN_INFO_TYPE
 from hand_codesign.core.run.runs import run_task
 from hand_codesign.core.run.signing import summary_valid
-from mcap.exceptions import EndOfFile
 from mcap.exceptions import McapError
 from mcap.records import Channel
 from mcap.records import Chunk
@@ -44,7 +47,6 @@ from mcap.records import Message
 from mcap.records import Schema
 from mcap.records import Statistics
 from mcap.stream_reader import breakup_chunk
-from mcap.stream_reader import StreamReader
 import numpy as np
 from rosbags.serde import SerdeError
 from rosbags.typesys import get_types_from_msg
@@ -54,8 +56,6 @@ from rosbags.typesys import TypesysError
 import yaml
 import zstandard
 
-MCAP_MAGIC = b'\x89MCAP0\r\n'
-
 # Fields appended to a message type after bags were recorded with it: a bag of the older
 # schema reads with these columns empty (no names, no values) in every row.
 LATER_FIELDS = {EVALUATION_TYPE: {'outcome_names': 'names', 'outcomes': 'values'}}
@@ -63,10 +63,6 @@ LATER_FIELDS = {EVALUATION_TYPE: {'outcome_names': 'names', 'outcomes': 'values'
 # What a damaged chunk raises while it is decompressed and broken up (lz4 raises RuntimeError).
 _DAMAGE_ERRORS = (McapError, struct.error, ValueError, UnicodeDecodeError, RuntimeError,
                   zstandard.ZstdError)
-
-
-class BagError(Exception):
-    """A bag that cannot be read as a hand_codesign run."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -195,7 +191,12 @@ class _Scan:
 
 
 def _bag_files(path):
-    """Return the .mcap files of a bag path (a file or a rosbag2 directory)."""
+    """
+    Return the .mcap files of a bag path (a file or a rosbag2 directory) in written order.
+
+    A directory's metadata.yaml, when there is one, says which of its files belong to the bag;
+    the order is always bag.files.bag_files', the order they were written in.
+    """
     if not path.exists():
         raise BagError(f'{path}: no such file or directory; expected a .mcap bag written by '
                        'the hand_codesign recorder')
@@ -206,34 +207,18 @@ def _bag_files(path):
         try:
             metadata = yaml.safe_load(metadata_path.read_text(encoding='utf-8'))
             names = metadata['rosbag2_bagfile_information']['relative_file_paths']
-            files = [path / pathlib.PurePath(name).name for name in names]
+            listed = {pathlib.PurePath(name).name for name in names}
         except (yaml.YAMLError, KeyError, TypeError) as error:
             raise BagError(f'{metadata_path}: not a rosbag2 metadata file ({error})') from None
-        missing = [str(file) for file in files if not file.is_file()]
+        missing = sorted(str(path / name) for name in listed if not (path / name).is_file())
         if missing:
             raise BagError(f'{metadata_path}: lists files that do not exist: {missing}')
-        return files
-    files = sorted(path.glob('*.mcap'))
+        return [file for file in bag_files(path) if file.name in listed]
+    files = bag_files(path)
     if not files:
         raise BagError(f'{path}: a directory without .mcap files or metadata.yaml; expected '
                        'a bag written by the hand_codesign recorder')
     return files
-
-
-def _check_start(path):
-    """Raise BagError unless path is a readable file that starts as an MCAP file does."""
-    try:
-        with open(path, 'rb') as stream:
-            start = stream.read(len(MCAP_MAGIC))
-    except OSError as error:
-        raise BagError(f'{path}: cannot read: {error}') from None
-    if not start:
-        raise BagError(f'{path}: empty file; expected an MCAP bag written by the hand_codesign '
-                       'recorder')
-    if start != MCAP_MAGIC:
-        raise BagError(
-            f'{path}: not an MCAP file (it starts with {start!r}, an MCAP file with '
-            f'{MCAP_MAGIC!r}); expected a bag written by the hand_codesign recorder')
 
 
 def scan_file(path, wanted=LOOP_TYPES):
@@ -245,22 +230,18 @@ def scan_file(path, wanted=LOOP_TYPES):
     Reading stops cleanly where the file is cut off (``truncated``); a chunk that cannot be
     decompressed or broken up is reported in ``damage`` and skipped.
     """
-    _check_start(path)
+    check_start(path)
     scan = _Scan(path, wanted)
-    scan.truncated = True
-    with open(path, 'rb') as stream:
-        try:
-            for record in StreamReader(stream, emit_chunks=True).records:
-                if type(record) is Chunk:
-                    _read_chunk(scan, record)
-                else:
-                    _read_record(scan, record)
-            scan.truncated = False
-        except EndOfFile:
-            pass
-        except (McapError, struct.error, ValueError, UnicodeDecodeError) as error:
-            scan.damage.append(f'a record after message {sum(scan.counts.values())} is '
-                               f'damaged ({error}); the rest of the file is not read')
+    records = Records(path, chunks=True)
+    for record in records:
+        if type(record) is Chunk:
+            _read_chunk(scan, record)
+        else:
+            _read_record(scan, record)
+    scan.truncated = records.cut or records.damage is not None
+    if records.damage is not None:
+        scan.damage.append(f'a record after message {sum(scan.counts.values())} is '
+                           f'damaged ({records.damage}); the rest of the file is not read')
     return scan
 
 

@@ -49,11 +49,11 @@ import time
 
 from ament_index_python.packages import get_package_share_directory
 from ament_index_python.packages import PackageNotFoundError
-from hand_codesign.ros.bag_metadata import add_rosbag2_record
-from hand_codesign.ros.bag_metadata import file_information
-from hand_codesign.ros.bag_metadata import MESSAGE_ENCODING
-from hand_codesign.ros.bag_metadata import topic_information
-from hand_codesign.ros.bag_metadata import write_metadata
+from hand_codesign.bag.metadata import add_rosbag2_record
+from hand_codesign.bag.metadata import file_information
+from hand_codesign.bag.metadata import MESSAGE_ENCODING
+from hand_codesign.bag.metadata import topic_information
+from hand_codesign.bag.metadata import write_metadata
 from mcap.writer import CompressionType
 from mcap.writer import Writer
 import yaml
@@ -236,7 +236,7 @@ class BagWriter:
 
         file_index > 0 continues an existing bag directory with its file <name>_<index>.mcap,
         and write() leaves out the messages whose message_key is in skip (what the earlier
-        files hold): ros.bag_files.continue_bag, for a restarted recorder.
+        files hold): bag.recovery.continue_bag, for a restarted recorder.
         """
         self.bag_path = pathlib.Path(path)
         if self.bag_path.suffix == '.mcap':

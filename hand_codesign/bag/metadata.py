@@ -1,16 +1,17 @@
 """
 A bag folder's rosbag2 metadata: the records rosbag2 keeps beside and inside the MCAP files.
 
-The vocabulary both the bag writer (ros.mcap_writer) and the bag mender (ros.bag_files) build
-on, so that neither needs the other's module: rosbag2's TopicInformation, FileInformation and
-BagMetadata (Jazzy, version 9), the metadata record inside each MCAP file, the order of a
-folder's files, and `write_metadata`, which writes a folder's metadata.yaml from the summaries
-of all its files.
+The vocabulary both the bag writer (bag.writer) and the bag mender (bag.recovery) build on,
+so that neither needs the other's module: rosbag2's TopicInformation, FileInformation and
+BagMetadata (Jazzy, version 9), the metadata record inside each MCAP file, and
+`write_metadata`, which writes a folder's metadata.yaml from the summaries of all its files
+(in the order of bag.files.bag_files).
 """
 
 import pathlib
-import re
 
+from hand_codesign.bag.files import bag_files
+from hand_codesign.bag.files import BagRecoveryError
 from mcap.reader import make_reader
 import yaml
 
@@ -19,19 +20,6 @@ MESSAGE_ENCODING = 'cdr'
 METADATA_VERSION = 9
 # rosbag2's MCAP storage plugin keeps the bag's metadata in a metadata record of this name
 ROSBAG2_RECORD, ROSBAG2_RECORD_KEY = 'rosbag2', 'serialized_metadata'
-_FILE_INDEX = re.compile(r'_(\d+)\.mcap$')
-
-
-class BagRecoveryError(RuntimeError):
-    """A bag that cannot be recovered: missing, not MCAP, or without a readable start."""
-
-
-def bag_files(folder):
-    """Return the .mcap files of a bag folder in the order they were written (<name>_<k>)."""
-    def order(path):
-        match = _FILE_INDEX.search(path.name)
-        return (int(match.group(1)) if match else -1, path.name)
-    return sorted(pathlib.Path(folder).glob('*.mcap'), key=order)
 
 
 def topic_information(topic, type_name, offered_qos_profiles, type_description_hash, count):

@@ -5,7 +5,7 @@ A recorder killed with SIGKILL leaves its file without the chunk in progress, su
 footer (everything flushed before the kill is there), and its bag folder without
 metadata.yaml; rosbags and Foxglove refuse such a bag. `recover_file` rewrites the complete
 records of such a file into a closed, indexed file (schemas, channels and messages in their
-order, then a summary and a footer) and `write_metadata` (ros.bag_metadata) writes the folder's
+order, then a summary and a footer) and `write_metadata` (bag.metadata) writes the folder's
 metadata.yaml from the summaries of all its files: that is `hand-codesign recover BAG`.
 
 A recorder restarted by the runner continues the same bag folder (`continue_bag`): it first
@@ -28,47 +28,36 @@ No rclpy here: `hand-codesign recover` works on a machine without ROS.
 
 import os
 import pathlib
-import struct
 
-from hand_codesign.ros.bag_metadata import add_rosbag2_record
-from hand_codesign.ros.bag_metadata import bag_files
-from hand_codesign.ros.bag_metadata import BagRecoveryError
-from hand_codesign.ros.bag_metadata import file_information
-from hand_codesign.ros.bag_metadata import topic_information
-from hand_codesign.ros.bag_metadata import write_metadata
-from hand_codesign.ros.mcap_writer import LIBRARY
-from hand_codesign.ros.mcap_writer import message_key
-from hand_codesign.ros.mcap_writer import PROFILE
-from mcap.exceptions import EndOfFile
-from mcap.exceptions import McapError
+from hand_codesign.bag.files import bag_files
+from hand_codesign.bag.files import BagRecoveryError
+from hand_codesign.bag.files import check_start
+from hand_codesign.bag.files import MCAP_MAGIC
+from hand_codesign.bag.files import Records
+from hand_codesign.bag.metadata import add_rosbag2_record
+from hand_codesign.bag.metadata import file_information
+from hand_codesign.bag.metadata import topic_information
+from hand_codesign.bag.metadata import write_metadata
+from hand_codesign.bag.writer import LIBRARY
+from hand_codesign.bag.writer import message_key
+from hand_codesign.bag.writer import PROFILE
 from mcap.records import Channel
 from mcap.records import Header
 from mcap.records import Message
 from mcap.records import Schema
-from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType
 from mcap.writer import Writer
-
-MCAP_MAGIC = b'\x89MCAP0\r\n'
 
 
 def records(path):
     """
     Yield the records of one MCAP file front to back, stopping quietly where it is cut off.
 
-    A file cut off before its header (even an empty one) yields nothing. Raise
-    BagRecoveryError for a file that does not start as an MCAP file.
+    A file cut off before its header (even an empty one) yields nothing. Raise BagError
+    (bag.files) for a file that does not start as an MCAP file.
     """
-    with open(path, 'rb') as stream:
-        start = stream.read(len(MCAP_MAGIC))
-    if start != MCAP_MAGIC[:len(start)]:
-        raise BagRecoveryError(f'{path}: not an MCAP file (it starts with {start!r}); '
-                               'expected a bag written by the hand_codesign recorder')
-    with open(path, 'rb') as stream:
-        try:
-            yield from StreamReader(stream).records
-        except (EndOfFile, McapError, struct.error, ValueError):
-            pass
+    check_start(path, cut_ok=True)
+    yield from Records(path)
 
 
 def is_closed(path):
