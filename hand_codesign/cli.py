@@ -32,6 +32,10 @@ VERBS = {
                 'close the bag of a recorder that was killed, so that any reader takes it'),
     'reproduce': ('hand_codesign.commands.reproduce', 'reproduce_command',
                   "run one of the paper's experiments and write its tables and figures"),
+    'offsets': ('hand_codesign.analysis.offsets', 'offsets_command',
+                "where a run's best design leaves the object, along each axis of the plane"),
+    'transfer': ('hand_codesign.analysis.transfer', 'transfer_command',
+                 'tabulate designs measured in both physics engines (analyze --unseen)'),
 }
 DEFAULT_PORT = 11811   # Fast DDS's own default for a discovery server
 MAX_DOMAIN_ID = 232    # ros.runner's; not imported from there, so that --help needs no ROS
@@ -144,6 +148,39 @@ def add_reproduce_arguments(parser):
                              'column of its table); the tables show every one measured')
     parser.add_argument('--format', choices=('png', 'svg', 'pdf'), default='png',
                         help='file format of the figures (default png)')
+    read_back = parser.add_mutually_exclusive_group()
+    read_back.add_argument('--bands', type=float, nargs='+', metavar='EDGE',
+                           help="don't run: print the share within per band of --quantity "
+                                "of the campaign's unseen worlds, pooled over --seeds (the "
+                                "budget's by default), e.g. --bands 0.5 0.75 1 1.5 2")
+    read_back.add_argument('--rates', nargs='?', const='paper', metavar='BUDGET',
+                           help="don't run: print the physics steps per second of the "
+                                "campaign's runs and the time BUDGET would take (default "
+                                'paper) here and on --hosts')
+    parser.add_argument('--quantity', default='scale',
+                        help='--bands: position_x, position_y, orientation, friction, scale '
+                             '(default), mass or turn_friction (friction x mass x scale)')
+    parser.add_argument('--cores', type=int, default=2, help='--rates: cores of this machine')
+    parser.add_argument('--hosts', type=int, default=4, help='--rates: hosts to estimate for')
+    parser.add_argument('--host-cores', type=int, default=8, help='--rates: cores per host')
+
+
+def add_offsets_arguments(parser):
+    parser.add_argument('bags', nargs='+', metavar='BAG', help='bags of finished runs')
+    parser.add_argument('--unseen', type=int, default=1000, help='unseen worlds (1000)')
+    parser.add_argument('--training', action='store_true',
+                        help="also measure on the run's own training worlds")
+    parser.add_argument('--table', metavar='OUT', help='write OUT.csv and OUT.md')
+
+
+def add_transfer_arguments(parser):
+    parser.add_argument('folder', help='folder of RUN-in-pybullet.json and RUN-in-mujoco.json, '
+                                       'written by `analyze BAG --unseen N --engine ENGINE`')
+    parser.add_argument('--title', required=True, help="the table's title")
+    parser.add_argument('--note', default='', help='a paragraph under the title')
+    parser.add_argument('--measures', nargs='*', default=[], metavar='DIR',
+                        help="a reproduce campaign's measures/ folder, for runs measured in "
+                             'MuJoCo only')
 
 
 def add_bag_arguments(verb, parser):
@@ -213,6 +250,10 @@ def build_parser():
             add_check_arguments(verb_parser)
         elif verb == 'reproduce':
             add_reproduce_arguments(verb_parser)
+        elif verb == 'offsets':
+            add_offsets_arguments(verb_parser)
+        elif verb == 'transfer':
+            add_transfer_arguments(verb_parser)
         else:
             add_bag_arguments(verb, verb_parser)
     return parser

@@ -9,12 +9,18 @@ PACKAGE = pathlib.Path(__file__).resolve().parents[1] / 'hand_codesign'
 # room -> modules it must never import (at any depth, also inside functions)
 FORBIDDEN = {
     'core': ('rclpy', 'hand_codesign_msgs', 'hand_codesign.bag', 'hand_codesign.ros',
-             'hand_codesign.analysis', 'hand_codesign.commands', 'hand_codesign.cli'),
+             'hand_codesign.analysis', 'hand_codesign.campaign', 'hand_codesign.commands',
+             'hand_codesign.cli'),
     # the bag format, readable without ROS by any tool: above core, below ros and analysis
     'bag': ('rclpy', 'hand_codesign_msgs', 'hand_codesign.ros', 'hand_codesign.analysis',
-            'hand_codesign.commands', 'hand_codesign.cli'),
-    'ros': ('hand_codesign.analysis', 'hand_codesign.commands', 'hand_codesign.cli'),
-    'analysis': ('rclpy', 'hand_codesign.ros', 'hand_codesign.commands', 'hand_codesign.cli'),
+            'hand_codesign.campaign', 'hand_codesign.commands', 'hand_codesign.cli'),
+    'ros': ('hand_codesign.analysis', 'hand_codesign.campaign', 'hand_codesign.commands',
+            'hand_codesign.cli'),
+    'analysis': ('rclpy', 'hand_codesign.ros', 'hand_codesign.campaign',
+                 'hand_codesign.commands', 'hand_codesign.cli'),
+    # the experiments and their tables: above analysis, below the commands that run them
+    'campaign': ('rclpy', 'hand_codesign_msgs', 'hand_codesign.ros', 'hand_codesign.commands',
+                 'hand_codesign.cli'),
 }
 MAX_NODE_LINES = 150
 
@@ -165,4 +171,23 @@ def test_the_task_room_never_imports_its_own_face():
     wrong = [module for module, targets in package_imports().items()
              if module.startswith('hand_codesign.core.task.')
              and 'hand_codesign.core.task' in targets]
+    assert not wrong, wrong
+
+
+def test_the_campaign_room_never_imports_its_faces():
+    # campaign/__init__.py names the room's modules; experiments/__init__.py imports every
+    # experiment's module and orders them: a module below importing either would be a circle
+    faces = ('hand_codesign.campaign', 'hand_codesign.campaign.experiments')
+    wrong = [f'{module} imports {target}' for module, targets in package_imports().items()
+             if module.startswith('hand_codesign.campaign.') and module not in faces
+             for target in targets if target in faces]
+    assert not wrong, wrong
+
+
+def test_an_experiment_module_imports_no_other_experiment():
+    # so a lever added to one experiment's module changes that experiment and no other
+    prefix = 'hand_codesign.campaign.experiments.'
+    wrong = [f'{module} imports {target}' for module, targets in package_imports().items()
+             if module.startswith(prefix)
+             for target in targets if target.startswith(prefix)]
     assert not wrong, wrong

@@ -1,7 +1,7 @@
 """A campaign's figures: median and interquartile band across seeds, any of three formats."""
 
 from hand_codesign import cli
-from hand_codesign.analysis import campaign
+from hand_codesign.campaign import figures
 import numpy as np
 import pytest
 
@@ -11,7 +11,7 @@ def test_the_band_is_the_seeds_percentiles_of_their_best_so_far():
               (2, ([10, 20], [3.0, 2.0])),          # ended early: its 2.0 holds after 20
               (3, ([20, 30], [9.0, 6.0])),          # told first at 20
               (4, ([], []))]                        # not run (yet): left out
-    grid, low, median, high = campaign.seed_band(curves)
+    grid, low, median, high = figures.seed_band(curves)
     assert grid.tolist() == [10, 20, 30]
     assert median.tolist() == [4.0, 4.0, 2.0]     # at 10: seeds 1, 2; then all three
     assert low.tolist() == [np.percentile([5, 3], 25), 3.0, 1.5]
@@ -25,7 +25,7 @@ def test_convergence_figure_is_written_in_the_format_asked(tmp_path, suffix, sta
                                 for seed in (1, 2, 3)]),
               ('mocma (MO-CMA-ES)', [(1, (np.arange(1, 4) * 20.0, np.array([2.0, 1.0, 0.5])))])]
     path = tmp_path / f'convergence.{suffix}'
-    campaign.plot_convergence(path, panels, 'tiny')
+    figures.plot_convergence(path, panels, 'tiny')
     assert path.read_bytes().startswith(start)
 
 

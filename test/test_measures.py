@@ -11,13 +11,13 @@ import dataclasses
 import json
 import pathlib
 
-from hand_codesign.analysis import campaign
+from hand_codesign.campaign import folders
+from hand_codesign.campaign import measures as campaign_measures
 from hand_codesign.core.evaluate import _TaskContext, evaluate_design
-from hand_codesign.core.experiments.catalog import ORIENTATION_01, PLANE_5MM, POSE
 from hand_codesign.core.experiments.measures import (LIMITS_FOUND_MIN_SHARE, LIMITS_FOUND_SHARE,
-                                                     measure_worlds, summarize,
-                                                     unseen_world_states, with_pose_error,
-                                                     WorldMeasures)
+                                                     measure_worlds, ORIENTATION_01, PLANE_5MM,
+                                                     POSE, summarize, unseen_world_states,
+                                                     with_pose_error, WorldMeasures)
 from hand_codesign.core.outcomes import fingers, LIMIT_TOLERANCE
 from hand_codesign.core.task import load_task
 from hand_codesign.core.task.genome import genome_spec
@@ -187,9 +187,9 @@ def test_old_records_without_the_reached_limits_are_measured_again(tmp_path):
                          'limit_contacts': [True]}}
     path = tmp_path / 'run.json'
     path.write_text(json.dumps(record))
-    assert campaign.read_measures(path, ('plane',)) is None
+    assert folders.read_measures(path, ('plane',)) is None
     record['worlds']['limit_reached'] = [True]
     path.write_text(json.dumps(record))
-    assert campaign.read_measures(path, ('plane', 'pose')) == record
-    measures = campaign.world_measures_of(record['worlds'])
+    assert folders.read_measures(path, ('plane', 'pose')) == record
+    measures = campaign_measures.world_measures_of(record['worlds'])
     assert dataclasses.is_dataclass(measures) and measures.errors['pose'][0] == 2.0

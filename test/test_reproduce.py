@@ -20,10 +20,12 @@ import textwrap
 import time
 
 from hand_codesign import cli
-from hand_codesign.analysis import campaign, records, unseen
+from hand_codesign.analysis import records, unseen
+from hand_codesign.campaign import experiment as definition
+from hand_codesign.campaign import experiments
+from hand_codesign.campaign.figures import convergence_panels
 from hand_codesign.commands import reproduce
 from hand_codesign.core.evaluate import evaluate
-from hand_codesign.core.experiments import catalog
 from hand_codesign.core.experiments.measures import (measure_worlds, shares_in_bands, summarize,
                                                      Tolerance, unseen_world_states)
 from hand_codesign.core.outcomes import fingers, LIMIT_TOLERANCE, resting_on_limit_touching
@@ -43,7 +45,7 @@ def test_list_names_every_experiment_first_on_its_line(capsys):
     assert cli.main(['reproduce', '--list']) == 0
     lines = capsys.readouterr().out.splitlines()
     names = [line.split()[0] for line in lines]
-    assert names == catalog.experiment_names()
+    assert names == experiments.experiment_names()
     for name in ('task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded',
                  'all'):
         assert name in names
@@ -55,37 +57,37 @@ def test_unknown_experiment_is_one_line(capsys):
     assert error.count('\n') == 0 and 'task9' in error and 'task5-joint-limits' in error
 
 
-@pytest.mark.parametrize('name', list(catalog.EXPERIMENTS))
+@pytest.mark.parametrize('name', list(experiments.EXPERIMENTS))
 def test_configurations_pin_their_algorithm_and_preset(name):
-    experiment = catalog.EXPERIMENTS[name]
+    experiment = experiments.EXPERIMENTS[name]
     keys = [configuration.key for configuration in experiment.configurations]
     assert len(set(keys)) == len(keys)
     assert set(experiment.budgets) == {'smoke', 'reduced', 'paper'}
     for configuration in experiment.configurations:
-        preset = catalog.pinned_dir() / configuration.preset
-        text = catalog.configuration_task_text(configuration, preset.read_text())
+        preset = definition.pinned_dir() / configuration.preset
+        text = definition.configuration_task_text(configuration, preset.read_text())
         task = parse_task(text, source=str(preset))
         assert task.algorithm == configuration.algorithm
         expected = ('CMA-ES', 'MO-CMA-ES') if not experiment.beyond_paper else (
-            catalog.ALGORITHM_NAMES.values())
+            definition.ALGORITHM_NAMES.values())
         assert configuration.algorithm_name in expected
         if not configuration.options:
             assert text.count('#') == preset.read_text().count('#')  # comments kept
 
 
 def test_all_runs_the_papers_experiments_and_levers_set_their_options():
-    names = [experiment.name for experiment in catalog.paper_experiments()]
+    names = [experiment.name for experiment in experiments.paper_experiments()]
     assert names == ['task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded']
-    levers = catalog.EXPERIMENTS['levers-task5']
+    levers = experiments.EXPERIMENTS['levers-task5']
     assert levers.beyond_paper
     by_key = {configuration.key: configuration for configuration in levers.configurations}
-    preset = catalog.pinned_dir() / 'task5.yaml'
-    worst = parse_task(catalog.configuration_task_text(by_key['cma-worst25'],
-                                                       preset.read_text()))
-    resampled = parse_task(catalog.configuration_task_text(by_key['cma-resample'],
-                                                           preset.read_text()))
-    both = parse_task(catalog.configuration_task_text(by_key['cma-worst25-resample'],
-                                                      preset.read_text()))
+    preset = definition.pinned_dir() / 'task5.yaml'
+    worst = parse_task(definition.configuration_task_text(by_key['cma-worst25'],
+                                                          preset.read_text()))
+    resampled = parse_task(definition.configuration_task_text(by_key['cma-resample'],
+                                                              preset.read_text()))
+    both = parse_task(definition.configuration_task_text(by_key['cma-worst25-resample'],
+                                                         preset.read_text()))
     paper = parse_task(preset.read_text())
     assert (worst.worlds.aggregate, worst.worlds.fraction) == ('worst', 0.25)
     assert resampled.worlds.resample == 'generation'
@@ -93,19 +95,19 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
         'worst', 0.25, 'generation')
     for task in (worst, resampled, both):  # nothing else changed
         assert task.replace(worlds=paper.worlds, source_text=paper.source_text) == paper
-    along_x = parse_task(catalog.configuration_task_text(
-        by_key['cma-along-x'], (catalog.pinned_dir() / 'task5_along_x.yaml').read_text()))
+    along_x = parse_task(definition.configuration_task_text(
+        by_key['cma-along-x'], (definition.pinned_dir() / 'task5_along_x.yaml').read_text()))
     assert [goal.axes for goal in along_x.goals.position] == [('x',)]
     assert along_x.replace(goals=paper.goals, source_text=paper.source_text) == paper
     assert levers.tolerances() == (Tolerance('plane', 0.005), Tolerance('x', 0.005),
                                    Tolerance('y', 0.005))
     # Task 6's hand turned 45 degrees about the vertical, fingers directly opposite, the box's
     # 90-degree symmetry: nothing else changed
-    task6 = parse_task((catalog.pinned_dir() / 'task6.yaml').read_text())
-    diagonal, = [c for c in catalog.EXPERIMENTS['levers-task6'].configurations
+    task6 = parse_task((definition.pinned_dir() / 'task6.yaml').read_text())
+    diagonal, = [c for c in experiments.EXPERIMENTS['levers-task6'].configurations
                  if c.key == 'cma-diagonal']
-    turned = parse_task(catalog.configuration_task_text(
-        diagonal, (catalog.pinned_dir() / diagonal.preset).read_text()))
+    turned = parse_task(definition.configuration_task_text(
+        diagonal, (definition.pinned_dir() / diagonal.preset).read_text()))
     _, palm = compose(((0, 0, 0), axis_angle_quaternion((0, 0, 1), math.pi / 4)),
                       ((0, 0, 0), task6.hand.base_orientation))
     np.testing.assert_allclose(turned.hand.base_orientation, palm, atol=1e-7)
@@ -119,29 +121,29 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
                                   orientation_symmetry=task6.goals.orientation_symmetry),
         source_text=task6.source_text) == task6
     for name in ('levers-task5', 'levers-task6'):  # quality diversity, its archive's defaults
-        mae, = [c for c in catalog.EXPERIMENTS[name].configurations if c.key == 'cma-mae']
-        text = (catalog.pinned_dir() / mae.preset).read_text()
-        task = parse_task(catalog.configuration_task_text(mae, text))
+        mae, = [c for c in experiments.EXPERIMENTS[name].configurations if c.key == 'cma-mae']
+        text = (definition.pinned_dir() / mae.preset).read_text()
+        task = parse_task(definition.configuration_task_text(mae, text))
         assert (task.algorithm, task.archive, mae.algorithm_name) == ('cma-mae', None, 'CMA-MAE')
         assert task.replace(algorithm='cma', source_text='') == parse_task(text).replace(
             source_text='')
     # CMA-MAE over the joint-limit span and the outcome limit_rest, on each preset's lever
     for name, key, preset in (('levers-task5', 'cma-mae-limit-rest-along-x', 'task5_along_x'),
                               ('levers-task6', 'cma-mae-limit-rest-diagonal', 'task6_diagonal')):
-        mae, = [c for c in catalog.EXPERIMENTS[name].configurations if c.key == key]
-        text = (catalog.pinned_dir() / f'{preset}.yaml').read_text()
+        mae, = [c for c in experiments.EXPERIMENTS[name].configurations if c.key == key]
+        text = (definition.pinned_dir() / f'{preset}.yaml').read_text()
         assert mae.preset == f'{preset}.yaml'
-        task = parse_task(catalog.configuration_task_text(mae, text))
+        task = parse_task(definition.configuration_task_text(mae, text))
         assert task.algorithm == 'cma-mae'
         assert task.archive.descriptors == ('joint_range', 'limit_rest')
         assert task.replace(algorithm='cma', archive=None, source_text='') == parse_task(
             text).replace(source_text='')
     # the probe of the diagonal hand on the smaller half of the boxes: trained and measured
     # there alone, nothing else changed
-    probe, = [c for c in catalog.EXPERIMENTS['levers-task6'].configurations
+    probe, = [c for c in experiments.EXPERIMENTS['levers-task6'].configurations
               if c.key == 'cma-diagonal-smaller-boxes']
-    text = (catalog.pinned_dir() / probe.preset).read_text()
-    task = parse_task(catalog.configuration_task_text(probe, text))
+    text = (definition.pinned_dir() / probe.preset).read_text()
+    task = parse_task(definition.configuration_task_text(probe, text))
     scales = [world.scale for world in unseen_world_states(task, 300)]
     assert 0.5 <= min(scales) < 0.55 and 0.95 < max(scales) <= 1.0
     assert task.replace(randomization=parse_task(text).randomization,
@@ -149,30 +151,30 @@ def test_all_runs_the_papers_experiments_and_levers_set_their_options():
     # the fingers placed closer to the box: nothing else changed
     for key, placement in (('cma-diagonal-fingers-60mm', 0.06),
                            ('cma-diagonal-fingers-45mm', 0.045)):
-        closer, = [c for c in catalog.EXPERIMENTS['levers-task6'].configurations
+        closer, = [c for c in experiments.EXPERIMENTS['levers-task6'].configurations
                    if c.key == key]
-        task = parse_task(catalog.configuration_task_text(closer, text))
+        task = parse_task(definition.configuration_task_text(closer, text))
         assert task.morphology.finger_position_x.values == (-placement, placement)
         pinned = parse_task(text)
         assert task.replace(morphology=pinned.morphology, source_text='') == pinned.replace(
             source_text='')
     reduced = levers.budget('reduced')
     assert (reduced.iterations, reduced.population, reduced.seeds) == (40, 40, 5)
-    assert catalog.training_worlds(by_key['cma'], reduced) == 16
-    assert catalog.training_worlds(by_key['cma'], levers.budget('paper')) == 64
+    assert definition.training_worlds(by_key['cma'], reduced) == 16
+    assert definition.training_worlds(by_key['cma'], levers.budget('paper')) == 64
 
 
 def test_task6_paper_hand_levers_change_one_thing_each_or_two_together():
     # the levers on Task 6's paper hand (the palm beside the box), chosen on tuning seeds
-    text = (catalog.pinned_dir() / 'task6_palm_beside.yaml').read_text()
+    text = (definition.pinned_dir() / 'task6_palm_beside.yaml').read_text()
     pinned = parse_task(text).replace(source_text='')
-    by_key = {c.key: c for c in catalog.EXPERIMENTS['levers-task6'].configurations
+    by_key = {c.key: c for c in experiments.EXPERIMENTS['levers-task6'].configurations
               if c.key.startswith('cma-palm-beside-') and 'hardest' not in c.key}
     assert len(by_key) == 7 and all(c.preset == 'task6_palm_beside.yaml'
                                     for c in by_key.values())
 
     def lever(key):
-        return parse_task(catalog.configuration_task_text(by_key[key], text)).replace(
+        return parse_task(definition.configuration_task_text(by_key[key], text)).replace(
             source_text='')
 
     worst, both = lever('cma-palm-beside-worst25'), lever('cma-palm-beside-worst25-resample')
@@ -200,12 +202,12 @@ def test_task6_paper_hand_levers_change_one_thing_each_or_two_together():
 
 def test_task6_hardest_boxes_probes_narrow_the_worlds_to_their_corner():
     # the probes train and measure Task 6's paper hand on the boxes hardest to turn alone
-    text = (catalog.pinned_dir() / 'task6_palm_beside.yaml').read_text()
+    text = (definition.pinned_dir() / 'task6_palm_beside.yaml').read_text()
     pinned = parse_task(text).replace(source_text='')
-    by_key = {c.key: c for c in catalog.EXPERIMENTS['levers-task6'].configurations}
+    by_key = {c.key: c for c in experiments.EXPERIMENTS['levers-task6'].configurations}
 
     def probe(key):
-        return parse_task(catalog.configuration_task_text(by_key[key], text)).replace(
+        return parse_task(definition.configuration_task_text(by_key[key], text)).replace(
             source_text='')
 
     corner = probe('cma-palm-beside-hardest-boxes')
@@ -308,10 +310,10 @@ def test_resting_on_a_limit_while_touching_matches_the_final_state():
 TINY = """
     import sys
     from hand_codesign.cli import main
-    from hand_codesign.core.experiments import catalog
-    from hand_codesign.core.experiments.catalog import Budget, Configuration, Experiment
+    from hand_codesign.campaign.experiment import Budget, Configuration, Experiment
+    from hand_codesign.campaign.experiments import EXPERIMENTS
     from hand_codesign.core.experiments.measures import Tolerance
-    catalog.EXPERIMENTS['tiny'] = Experiment(
+    EXPERIMENTS['tiny'] = Experiment(
         'tiny', 'two small Task 5 runs',
         (Configuration('torque-cma-2w', 'task5.yaml', 'cma', 2, 'torque'),
          Configuration('torque-mocma-16w', 'task5.yaml', 'mocma', 16, 'torque')),
@@ -412,7 +414,7 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
     assert table['torque-cma-2w']['algorithm'] == 'CMA-ES'
     tolerance = Tolerance('plane', 0.005)
     for key, bag in (('torque-cma-2w', finished.parent), ('torque-mocma-16w', resumed)):
-        task, x, _ = campaign.final_design(bag)
+        task, x, _ = records.final_design(bag)
         measured = measure_worlds(x, task, unseen_world_states(task, 12))
         summary = summarize(measured, tolerance)
         row = table[key]
@@ -443,12 +445,12 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
 
     # the convergence figure has a panel for each configuration with runs, none for the rest
     configurations = tuple(
-        catalog.Configuration(key, 'task5.yaml', algorithm, worlds, 'torque')
+        definition.Configuration(key, 'task5.yaml', algorithm, worlds, 'torque')
         for key, algorithm, worlds in (('torque-cma-2w', 'cma', 2),
                                        ('never-run', 'cma', 2),
                                        ('torque-mocma-16w', 'mocma', 16)))
-    tiny = catalog.Experiment('tiny', '', configurations, tolerance, {})
-    panels = campaign.convergence_panels(out, tiny, seeds=(1,))
+    tiny = definition.Experiment('tiny', '', configurations, tolerance, {})
+    panels = convergence_panels(out, tiny, seeds=(1,))
     assert [label for label, _ in panels] == ['torque-cma-2w (CMA-ES)',
                                               'torque-mocma-16w (MO-CMA-ES)']
     assert all(len(told) == len(best) > 0 for _, curves in panels for _, (told, best) in curves)
@@ -494,7 +496,7 @@ def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsy
     printed = capsys.readouterr().out
     assert 'On 20 unseen worlds' in printed and 'joint limits found' in printed
     values = json.loads((out / 'unseen.json').read_text())
-    task, x, _ = campaign.final_design(real_run.bag)
+    task, x, _ = records.final_design(real_run.bag)
     measured = measure_worlds(x, task, unseen_world_states(task, 20))
     plane = summarize(measured, Tolerance('plane', 0.005))
     assert values['summaries'][0]['within'] == plane.within
@@ -541,11 +543,11 @@ def test_every_preset_and_table_named_in_results_exists_and_checks():
 
 
 def test_seeds_are_a_count_a_range_or_a_list(capsys):
-    assert catalog.parse_seeds('3') == (1, 2, 3)  # the tuning seeds
-    assert catalog.parse_seeds('101-105') == (101, 102, 103, 104, 105)  # fresh seeds
-    assert catalog.parse_seeds('4,7,4') == (4, 7)
-    assert catalog.seeds_text((101, 102, 103)) == 'seeds 101 to 103'
-    assert catalog.seeds_text((4, 7)) == 'seeds 4, 7'
+    assert definition.parse_seeds('3') == (1, 2, 3)  # the tuning seeds
+    assert definition.parse_seeds('101-105') == (101, 102, 103, 104, 105)  # fresh seeds
+    assert definition.parse_seeds('4,7,4') == (4, 7)
+    assert definition.seeds_text((101, 102, 103)) == 'seeds 101 to 103'
+    assert definition.seeds_text((4, 7)) == 'seeds 4, 7'
     for bad in ('0', '5-x', '', '3-1'):
         assert cli.main(['reproduce', 'levers-task6', '--seeds', bad]) == 2
         error = capsys.readouterr().err.strip()
@@ -556,4 +558,4 @@ def test_seeds_are_a_count_a_range_or_a_list(capsys):
     assert cli.main(['reproduce', 'levers-task6', '--seeds', '105']) == 2
     error = capsys.readouterr().err.strip()
     assert error.count('\n') == 0 and '105-105' in error and '1-105' in error
-    assert catalog.parse_seeds('1-105') == tuple(range(1, 106))
+    assert definition.parse_seeds('1-105') == tuple(range(1, 106))

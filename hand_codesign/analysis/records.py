@@ -567,6 +567,19 @@ def archive_of(record):
     return replayed_optimizer(record, QD_ALGORITHMS)
 
 
+def final_design(bag):
+    """Return (task, normalized genome, structure) of a finished run's best design."""
+    record = open_run(bag, warn=False)
+    summary = last_summary(record)
+    if summary is not None and summary['final'] and len(np.ravel(summary['best_genome'])):
+        structure = tuple(int(joints) for joints in np.ravel(summary['structure']))
+        x = np.asarray(summary['best_genome'], dtype=float).ravel()
+    else:
+        design = recorded_design(record, best_candidate_id(record))
+        structure, x = design.structure, design.x
+    return run_task_of(record, Variant(structure=tuple(structure or ()))), x, structure
+
+
 def ranked_candidate_id(record, generation=None, rank=0):
     """Return the id of the rank-th best (lowest fitness) OK evaluation, of one generation."""
     rows = evaluation_rows(record)

@@ -69,3 +69,17 @@ def markdown_cell(text):
 
 
 # -------------------------------------------------------------------- figures
+
+
+def percent(share):
+    """Return a share as the tables write it, e.g. '58 %'."""
+    return f'{100 * share:.0f} %'
+
+
+def error_text(value, tolerance):
+    """Return an error in the table's unit: mm for distances, rad for angles, x for poses."""
+    if tolerance.kind == 'orientation':
+        return f'{value:.3f} rad'
+    if tolerance.kind == 'pose':
+        return f'{value:.2f} x'
+    return f'{value * 1000:.1f} mm'

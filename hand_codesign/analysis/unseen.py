@@ -1,7 +1,7 @@
 """
 `analyze BAG --unseen N`: a run's best design on N worlds it never trained on.
 
-The same measures as a reproduce campaign's (analysis.campaign, core.experiments.measures),
+The same measures as a reproduce campaign's (hand_codesign.campaign, core.experiments.measures),
 for one bag: the share of worlds within each tolerance of the task's goals, the median and
 90th percentile of the error, whether the design found its joint limits, and where in each
 randomized quantity's range it fails (bands of equal width).
@@ -9,10 +9,11 @@ randomized quantity's range it fails (bands of equal width).
 
 import dataclasses
 
-from hand_codesign.analysis.campaign import error_text, final_design, percent
-from hand_codesign.core.experiments.catalog import (ALONG_X_5MM, ALONG_Y_5MM, ORIENTATION_01,
-                                                    PLANE_5MM, POSE, POSITION_5MM)
-from hand_codesign.core.experiments.measures import (measure_worlds, shares_in_bands, summarize,
+from hand_codesign.analysis.records import final_design
+from hand_codesign.analysis.tables import error_text, percent
+from hand_codesign.core.experiments.measures import (ALONG_X_5MM, ALONG_Y_5MM, measure_worlds,
+                                                     ORIENTATION_01, PLANE_5MM, POSE,
+                                                     POSITION_5MM, shares_in_bands, summarize,
                                                      unseen_world_states)
 from hand_codesign.core.experiments.robustness import world_values
 from hand_codesign.core.sim.worlds import QUANTITIES

@@ -1,12 +1,12 @@
 """
 `hand-codesign reproduce EXPERIMENT [--budget B] [--seeds S] [--evaluators E] [--out DIR]`.
 
-Runs one of the paper's experiments (core.experiments.catalog; `reproduce --list` names them) as a
-campaign: every configuration once per seed (`--seeds 3`: 1 to 3, the tuning seeds;
-`--seeds 101-105`: fresh seeds for headline figures; or a list `4,7`), each a normal
+Runs one of the paper's experiments (hand_codesign.campaign.experiments; `reproduce --list`
+names them) as a campaign: every configuration once per seed (`--seeds 3`: 1 to 3, the tuning
+seeds; `--seeds 101-105`: fresh seeds for headline figures; or a list `4,7`), each a normal
 `hand-codesign run` with its own bag under DIR/runs/, then measures every final design on
 worlds it never trained on (core.experiments.measures) and writes the experiment's tables (`.csv`,
-`.md`, a row per configuration) and figures into DIR (layout: hand_codesign.analysis.campaign).
+`.md`, a row per configuration) and figures into DIR (layout: hand_codesign.campaign.folders).
 `--only` runs some of the experiment's configurations: a new lever beside a campaign that
 already measured the others.
 
@@ -25,9 +25,20 @@ import subprocess
 import sys
 import time
 
-from hand_codesign.analysis import campaign
+from hand_codesign.campaign import experiments
+from hand_codesign.campaign import folders
+from hand_codesign.campaign import measures
+from hand_codesign.campaign import results
+from hand_codesign.campaign.bands import band_lines
+from hand_codesign.campaign.experiment import configuration_task_text
+from hand_codesign.campaign.experiment import parse_seeds
+from hand_codesign.campaign.experiment import pinned_dir
+from hand_codesign.campaign.experiment import run_key
+from hand_codesign.campaign.experiment import seeds_text
+from hand_codesign.campaign.experiment import training_worlds
+from hand_codesign.campaign.rates import Machines
+from hand_codesign.campaign.rates import rate_lines
 from hand_codesign.commands.run import termination_as_interrupt
-from hand_codesign.core.experiments import catalog
 from hand_codesign.core.run import preview
 from hand_codesign.core.run.runs import load_run_task
 from hand_codesign.core.run.summary import format_duration
@@ -45,14 +56,16 @@ PROGRESS_EVERY = 300.0  # s between a run's progress lines: an hour's run says w
 def reproduce_command(arguments):
     """Run (or continue) an experiment's campaign and write its tables; return exit code."""
     if arguments.list:
-        for name in catalog.experiment_names():
+        for name in experiments.experiment_names():
             summary = ('every experiment of the paper above, one after the other'
-                       if name == catalog.ALL else catalog.EXPERIMENTS[name].summary)
+                       if name == experiments.ALL else experiments.EXPERIMENTS[name].summary)
             print(f'{name}  {summary}')
         return 0
+    if getattr(arguments, 'bands', None) or getattr(arguments, 'rates', None):
+        return read_back_command(arguments)
     chosen = chosen_experiments(arguments.experiment)
     seeds = check_arguments(arguments)
-    out = pathlib.Path(arguments.out or f'results/{arguments.experiment}-{arguments.budget}')
+    out = campaign_folder(arguments)
     campaigns = [Campaign(experiment, arguments.budget, seeds,
                           out if len(chosen) == 1 else out / experiment.name,
                           chosen_configurations(experiment, arguments.only),
@@ -61,7 +74,7 @@ def reproduce_command(arguments):
     for item in campaigns:
         item.prepare()
         print(f'reproduce: {item.experiment.name}, budget {item.budget.describe()}; '
-              f'{catalog.seeds_text(item.seeds)}; {_count(len(item.runs), "run")} of '
+              f'{seeds_text(item.seeds)}; {_count(len(item.runs), "run")} of '
               f'{_count(arguments.evaluators, "evaluator")}; '
               f'folder {item.out}', flush=True)
     progress = Progress(sum(len(item.runs) for item in campaigns))
@@ -79,6 +92,39 @@ def reproduce_command(arguments):
     return 0
 
 
+def read_back_command(arguments):
+    """
+    Print what a campaign folder holds, without running: `--bands` or `--rates`.
+
+    --bands: the share within per band of a quantity of the unseen worlds (campaign.bands);
+    --rates: the physics steps per second of its runs and the time of another budget
+    (campaign.rates). Both read one experiment's folder (--out, default as a campaign's).
+    """
+    chosen = chosen_experiments(arguments.experiment)
+    if len(chosen) != 1:
+        raise UserError("--bands and --rates read one experiment's campaign; name it")
+    experiment, out = chosen[0], campaign_folder(arguments)
+    seeds = check_arguments(arguments)
+    if arguments.bands:
+        edges = arguments.bands
+        if len(edges) < 2 or list(edges) != sorted(edges):
+            raise UserError(f'--bands: expected two or more edges, ascending; got {edges}')
+        seeds = seeds or range(1, experiment.budget(arguments.budget).seeds + 1)
+        lines = band_lines(out, experiment, seeds, arguments.quantity, edges)
+    else:
+        target = experiment.budgets.get(arguments.rates)   # rate_lines refuses a wrong one
+        count = len(seeds) if seeds else target.seeds if target else 0
+        lines = rate_lines(out, experiment, arguments.rates, count,
+                           Machines(arguments.cores, arguments.hosts, arguments.host_cores))
+    print('\n'.join(lines))
+    return 0
+
+
+def campaign_folder(arguments):
+    """Return the campaign folder: --out, or results/EXPERIMENT-BUDGET."""
+    return pathlib.Path(arguments.out or f'results/{arguments.experiment}-{arguments.budget}')
+
+
 def _count(number, noun):
     """Return `number noun`, the noun plural unless the number is one ("1 run", "2 runs")."""
     return f'{number} {noun}' if number == 1 else f'{number} {noun}s'
@@ -88,12 +134,12 @@ def chosen_experiments(name):
     """Return the Experiments of a name (all of them for `all`), or raise UserError."""
     if name is None:
         raise UserError('name an experiment (see `hand-codesign reproduce --list`)')
-    if name == catalog.ALL:
-        return catalog.paper_experiments()
-    if name not in catalog.EXPERIMENTS:
+    if name == experiments.ALL:
+        return experiments.paper_experiments()
+    if name not in experiments.EXPERIMENTS:
         raise UserError(f'unknown experiment "{name}"; expected one of '
-                        f'{", ".join(catalog.experiment_names())}')
-    return [catalog.EXPERIMENTS[name]]
+                        f'{", ".join(experiments.experiment_names())}')
+    return [experiments.EXPERIMENTS[name]]
 
 
 def chosen_configurations(experiment, keys):
@@ -115,7 +161,7 @@ def check_arguments(arguments):
     if arguments.seeds is None:
         return None
     try:
-        return catalog.parse_seeds(arguments.seeds)
+        return parse_seeds(arguments.seeds)
     except ValueError as error:
         raise UserError(str(error)) from None
 
@@ -199,7 +245,7 @@ class Campaign:
                     'population': self.budget.population,
                     'unseen_worlds': self.budget.unseen_worlds}
         if path.exists():
-            recorded = campaign.read_campaign(self.out)
+            recorded = folders.read_campaign(self.out)
             differs = [key for key, value in settings.items() if recorded.get(key) != value]
             if differs:
                 raise UserError(
@@ -215,12 +261,12 @@ class Campaign:
         for configuration in self.experiment.configurations:
             task_file = self.task_file(configuration)
             if not task_file.exists():
-                preset = catalog.pinned_dir() / configuration.preset
+                preset = pinned_dir() / configuration.preset
                 try:
                     text = preset.read_text(encoding='utf-8')
                 except OSError as error:
                     raise UserError(f'{preset}: cannot read the pinned preset: {error}')
-                task_file.write_text(catalog.configuration_task_text(configuration, text),
+                task_file.write_text(configuration_task_text(configuration, text),
                                      encoding='utf-8')
             try:
                 self.run_task(configuration, self.seeds[0])
@@ -234,7 +280,7 @@ class Campaign:
         """Return the Task of one run (the campaign's task text and the budget)."""
         return load_run_task(self.task_file(configuration), seed, self.budget.iterations,
                              self.budget.population,
-                             catalog.training_worlds(configuration, self.budget))
+                             training_worlds(configuration, self.budget))
 
     def cost(self, configuration):
         """
@@ -267,14 +313,14 @@ class Campaign:
     def run_all(self, progress, evaluators):
         """Run, resume or skip every run of the campaign, and measure each."""
         for configuration, seed in self.runs:
-            key = catalog.run_key(configuration, seed)
+            key = run_key(configuration, seed)
             if self.measured(configuration, seed):
                 progress.announce(key, 'finished and measured: kept')
                 continue
             started = time.monotonic()
-            bag = campaign.finished_bag(self.runs_dir, key)
+            bag = folders.finished_bag(self.runs_dir, key)
             state = ('finished: measuring' if bag else 'resuming from its bag'
-                     if campaign.attempts(self.runs_dir, key) else 'starting')
+                     if folders.attempts(self.runs_dir, key) else 'starting')
             progress.announce(key, state)
             if bag is None:
                 bag = self.run_one(configuration, seed, evaluators)
@@ -284,10 +330,10 @@ class Campaign:
 
     def run_one(self, configuration, seed, evaluators):
         """Run (or resume) one run to its end; return its finished bag."""
-        key = catalog.run_key(configuration, seed)
+        key = run_key(configuration, seed)
         self.runs_dir.mkdir(parents=True, exist_ok=True)
-        previous = campaign.attempts(self.runs_dir, key)
-        bag = campaign.next_attempt(self.runs_dir, key)
+        previous = folders.attempts(self.runs_dir, key)
+        bag = folders.next_attempt(self.runs_dir, key)
         common = ['--bag', str(bag), '--evaluators', str(evaluators), '--quiet',
                   '--progress-every', f'{PROGRESS_EVERY:g}',
                   '--domain-id', 'auto']   # campaigns side by side never share a domain
@@ -337,12 +383,12 @@ class Campaign:
     # ---------------------------------------------------------------- measures
 
     def measures_path(self, configuration, seed, suffix=''):
-        return self.out / 'measures' / f'{catalog.run_key(configuration, seed)}{suffix}.json'
+        return self.out / 'measures' / f'{run_key(configuration, seed)}{suffix}.json'
 
     def measured(self, configuration, seed):
         """Return True if the run is finished and every measure of it is cached."""
-        if campaign.read_measures(self.measures_path(configuration, seed),
-                                  self.error_kinds()) is None:
+        if folders.read_measures(self.measures_path(configuration, seed),
+                                 self.error_kinds()) is None:
             return False
         return (not self.experiment.per_structure
                 or self.measures_path(configuration, seed, '.structures').exists())
@@ -353,21 +399,21 @@ class Campaign:
     def measure(self, configuration, seed, bag, processes):
         """Measure a finished run's design (and each structure's best) on unseen worlds."""
         tolerance, count = self.experiment.tolerance, self.budget.unseen_worlds
-        campaign.cached_measures(self.measures_path(configuration, seed),
-                                 lambda: campaign.measure_bag(bag, tolerance, count, processes),
-                                 self.error_kinds())
+        folders.cached_measures(self.measures_path(configuration, seed),
+                                lambda: measures.measure_bag(bag, tolerance, count, processes),
+                                self.error_kinds())
         if self.experiment.per_structure:
-            bags = campaign.attempts(self.runs_dir, catalog.run_key(configuration, seed))
-            campaign.cached_measures(
+            bags = folders.attempts(self.runs_dir, run_key(configuration, seed))
+            folders.cached_measures(
                 self.measures_path(configuration, seed, '.structures'),
-                lambda: campaign.measure_structures(bags, tolerance, count, processes))
+                lambda: measures.measure_structures(bags, tolerance, count, processes))
 
     # ---------------------------------------------------------------- results
 
     def write_results(self):
         """Write the experiment's tables and figures from its runs' measures."""
-        paths = campaign.write_results(self.out, self.experiment, self.budget, self.seeds,
-                                       self.figure_format)
+        paths = results.write_results(self.out, self.experiment, self.budget, self.seeds,
+                                      self.figure_format)
         print(f'reproduce: {self.experiment.name} ({self.budget.describe()}, '
-              f'{catalog.seeds_text(self.seeds)}): '
+              f'{seeds_text(self.seeds)}): '
               f'{", ".join(str(path) for path in paths)}', flush=True)

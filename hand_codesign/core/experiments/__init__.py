@@ -1,7 +1,8 @@
 """
-The experiments room: the paper's experiments and what they measure of a design.
+The experiments room: what the paper's experiments measure of a design.
 
-Modules: catalog (the experiments `reproduce` runs: configurations and budgets), measures
-(a design on worlds it never trained on), robustness (a design over many world states, Fig.
-3). Imports core's root, the task and sim rooms; never search, run or rig.
+Modules: measures (a design on worlds it never trained on, and the tolerances it is judged
+by), robustness (a design over many world states, Fig. 3). The experiments themselves, their
+configurations and budgets, are the campaign room's (hand_codesign.campaign). Imports core's
+root, the task and sim rooms; never search, run or rig.
 """

@@ -84,6 +84,16 @@ class Tolerance:
         return f'{self.kind} error < {self.limit * 1000:g} mm'
 
 
+# The tolerances the experiments (hand_codesign.campaign) and `analyze --unseen` measure by
+PLANE_5MM = Tolerance('plane', 0.005)
+POSITION_5MM = Tolerance('position', 0.005)
+ALONG_X_5MM = Tolerance('x', 0.005)
+ALONG_Y_5MM = Tolerance('y', 0.005)
+ORIENTATION_01 = Tolerance('orientation', 0.1)
+# Task 4: turn the box and keep its position: within 5 mm in the plane and 0.1 rad at once
+POSE = Tolerance('pose', 1.0)
+
+
 def unseen_world_states(task, count):
     """Return `count` worlds of the task's ranges from a stream disjoint from its training."""
     generator = np.random.default_rng([int(task.seed), UNSEEN_STREAM])

@@ -1,7 +1,7 @@
 """
 Where a run's best design leaves the object on the plane, against where the world put it.
 
-    python tools/final_offsets.py BAG [BAG ...] [--unseen 1000] [--training] [--table OUT]
+    hand-codesign offsets BAG [BAG ...] [--unseen 1000] [--training] [--table OUT]
 
 Each bag's best design is simulated on N unseen worlds (core.experiments.measures, as `reproduce`
 and `analyze --unseen` measure it). Per axis of the plane, x and y of the world, it prints the
@@ -17,15 +17,12 @@ worlds says the design falls short on the very worlds it was optimized on, not b
 generalizing. --table OUT writes OUT.csv and OUT.md, a row per bag and set of worlds.
 """
 
-import argparse
 import csv
 import pathlib
-import sys
 
-from hand_codesign.analysis.campaign import final_design
+from hand_codesign.analysis.records import final_design
 from hand_codesign.core.experiments.measures import measure_worlds, unseen_world_states
 from hand_codesign.core.sim.worlds import world_states
-from hand_codesign.errors import UserError
 import numpy as np
 
 TOLERANCE = 0.005  # m
@@ -86,14 +83,17 @@ def report(bag, task, kind, row, axes):
               f"start's offset: slope {slope:.2f}, correlation {correlation:.2f}")
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
-    parser.add_argument('bags', nargs='+', help='bags of finished runs')
-    parser.add_argument('--unseen', type=int, default=1000, help='unseen worlds (1000)')
-    parser.add_argument('--training', action='store_true',
-                        help="also measure on the run's own training worlds")
-    parser.add_argument('--table', metavar='OUT', help='write OUT.csv and OUT.md')
-    arguments = parser.parse_args()
+def offsets_command(arguments):
+    """
+    Measure each bag's best design and print (and with --table write) its shares by axis.
+
+    Args:
+        arguments: bags (paths of finished runs), unseen (how many unseen worlds), training
+            (also the run's own worlds), table (OUT of OUT.csv and OUT.md, or None).
+
+    Returns:
+        0; a path that is no bag of the recorder raises UserError (one line).
+    """
     rows = []
     for bag in arguments.bags:
         task, x, _ = final_design(bag)
@@ -107,10 +107,4 @@ def main():
             report(bag, task, kind, rows[-1], axes)
     if arguments.table:
         write_table(arguments.table, rows)
-
-
-if __name__ == '__main__':
-    try:
-        main()
-    except UserError as error:  # a path that is not a bag of the recorder
-        sys.exit(f'final_offsets: {error}')
+    return 0

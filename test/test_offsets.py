@@ -1,24 +1,23 @@
-"""tools/final_offsets.py: where a run's best design leaves the object, axis by axis."""
+"""`hand-codesign offsets`: where a run's best design leaves the object, axis by axis."""
 
 import csv
-import pathlib
 import re
 import subprocess
 import sys
 
 from analysis_run import BUDGET
-from hand_codesign.analysis.campaign import final_design
+from hand_codesign.analysis.records import final_design
 from hand_codesign.core.experiments.measures import (measure_worlds, summarize, Tolerance,
                                                      unseen_world_states)
 from hand_codesign.core.experiments.robustness import start_and_goal_poses
 from hand_codesign.core.sim.worlds import world_states
 import numpy as np
 
-TOOL = pathlib.Path(__file__).resolve().parents[1] / 'tools' / 'final_offsets.py'
+COMMAND = [sys.executable, '-m', 'hand_codesign.cli', 'offsets']
 
 
 def test_shares_along_each_axis_are_the_measures_of_reproduce(real_run):
-    completed = subprocess.run([sys.executable, str(TOOL), str(real_run.bag), '--unseen', '30'],
+    completed = subprocess.run([*COMMAND, str(real_run.bag), '--unseen', '30'],
                                capture_output=True, text=True, timeout=300)
     assert completed.returncode == 0, completed.stderr
     task, x, _ = final_design(real_run.bag)
@@ -38,7 +37,7 @@ def test_shares_along_each_axis_are_the_measures_of_reproduce(real_run):
 def test_training_worlds_are_the_runs_own_and_the_table_holds_both_sets(real_run, tmp_path):
     out = tmp_path / 'offsets'
     completed = subprocess.run(
-        [sys.executable, str(TOOL), str(real_run.bag), '--unseen', '10', '--training',
+        [*COMMAND, str(real_run.bag), '--unseen', '10', '--training',
          '--table', str(out)], capture_output=True, text=True, timeout=300)
     assert completed.returncode == 0, completed.stderr
     with out.with_suffix('.csv').open() as stream:
@@ -55,8 +54,8 @@ def test_training_worlds_are_the_runs_own_and_the_table_holds_both_sets(real_run
 
 
 def test_a_path_that_is_not_a_bag_gets_one_line(tmp_path):
-    completed = subprocess.run([sys.executable, str(TOOL), str(tmp_path)], capture_output=True,
+    completed = subprocess.run([*COMMAND, str(tmp_path)], capture_output=True,
                                text=True, timeout=300)
-    assert completed.returncode != 0 and completed.stdout == ''
+    assert completed.returncode == 2 and completed.stdout == ''
     lines = completed.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f'final_offsets: {tmp_path}: ')
+    assert len(lines) == 1 and lines[0].startswith(f'hand-codesign offsets: error: {tmp_path}: ')

@@ -1,5 +1,5 @@
 """
-Table of designs measured in both physics engines (issue 27's transfer): a CSV and a Markdown.
+Table of designs measured in both physics engines (their transfer): a CSV and a Markdown.
 
 Reads FOLDER/RUN-in-ENGINE.json, the `unseen.json` that `hand-codesign analyze BAG --unseen N
 --engine ENGINE` writes, one per run and engine, and writes FOLDER.csv and FOLDER.md: per run,
@@ -11,14 +11,14 @@ shares of each engine's runs (every run has the same number of worlds: the poole
 missing RUN-in-pybullet.json: its summary, measured on the same unseen worlds, is copied to
 FOLDER/RUN-in-pybullet.json (small), so the table is then rewritten from FOLDER alone.
 
-Usage: python tools/transfer_table.py FOLDER --title TEXT [--note TEXT] [--measures DIR ...]
+Usage: hand-codesign transfer FOLDER --title TEXT [--note TEXT] [--measures DIR ...]
 """
 
-import argparse
 import csv
 import json
 import pathlib
-import sys
+
+from hand_codesign.errors import UserError
 
 ENGINES = ('pybullet', 'mujoco')
 NAMES = {'pybullet': 'PyBullet', 'mujoco': 'MuJoCo'}
@@ -48,7 +48,7 @@ def read_runs(folder):
     for path in sorted(folder.glob('*-in-*.json')):
         run, engine = path.stem.rsplit('-in-', 1)
         if engine not in ENGINES:
-            raise SystemExit(f'{path}: expected RUN-in-pybullet.json or RUN-in-mujoco.json')
+            raise UserError(f'{path}: expected RUN-in-pybullet.json or RUN-in-mujoco.json')
         runs.setdefault(run, {})[engine] = json.loads(path.read_text())
     return runs
 
@@ -76,12 +76,12 @@ def rows_of(runs):
     rows = []
     for run, measured in runs.items():
         if set(measured) != set(ENGINES):
-            raise SystemExit(f'{run}: measured in {sorted(measured)} only, expected both')
+            raise UserError(f'{run}: measured in {sorted(measured)} only, expected both')
         found = measured['mujoco']['run_engine']
         other = 'mujoco' if found == 'pybullet' else 'pybullet'
         home, away = measured[found]['summaries'][0], measured[other]['summaries'][0]
         if home['worlds'] != away['worlds'] or home['tolerance'] != away['tolerance']:
-            raise SystemExit(f'{run}: the two engines measured different worlds or tolerances')
+            raise UserError(f'{run}: the two engines measured different worlds or tolerances')
         rows.append({'run': run, 'found_in': found, 'worlds': home['worlds'],
                      'tolerance': tolerance_text(home['tolerance']),
                      'within_found': home['within'], 'within_other': away['within'],
@@ -125,22 +125,24 @@ def markdown(rows, title, note):
     return '\n'.join(lines)
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument('folder', type=pathlib.Path)
-    parser.add_argument('--title', required=True)
-    parser.add_argument('--note', default='')
-    parser.add_argument('--measures', nargs='*', default=[])
-    arguments = parser.parse_args()
-    folder = arguments.folder
+def transfer_command(arguments):
+    """
+    Write FOLDER.csv and FOLDER.md of the runs measured in both engines; print where.
+
+    Args:
+        arguments: folder (of RUN-in-ENGINE.json), title and note (of the Markdown),
+            measures (reproduce's measures/ folders standing in for missing PyBullet files).
+
+    Returns:
+        0; a folder without a run measured in both engines raises UserError (one line).
+    """
+    folder = pathlib.Path(arguments.folder)
     if not folder.is_dir():
-        print(f'{folder}: not a folder of RUN-in-ENGINE.json files', file=sys.stderr)
-        return 2
+        raise UserError(f'{folder}: not a folder of RUN-in-ENGINE.json files')
     copy_measures(folder, arguments.measures)
     rows = rows_of(read_runs(folder))
     if not rows:
-        print(f'{folder}: no RUN-in-ENGINE.json files', file=sys.stderr)
-        return 2
+        raise UserError(f'{folder}: no RUN-in-ENGINE.json files')
     with open(folder.with_suffix('.csv'), 'w', newline='') as stream:
         writer = csv.DictWriter(stream, COLUMNS, extrasaction='ignore')
         writer.writeheader()
@@ -149,7 +151,3 @@ def main():
     print(f'wrote {folder.with_suffix(".csv")} and {folder.with_suffix(".md")} '
           f'({runs_text(len(rows))})')
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

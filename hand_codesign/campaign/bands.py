@@ -1,8 +1,8 @@
 """
 Which unseen worlds a campaign's designs fail on: the share within per band of one quantity.
 
-    python tools/within_by_world.py results/levers-task6-reduced levers-task6 \
-        [--quantity scale] [--bands 0.5 0.75 1 1.25 1.5 2] [--seeds 5 | 101-105]
+    hand-codesign reproduce levers-task6 --out results/levers-task6-reduced \
+        --bands 0.5 0.75 1 1.25 1.5 2 [--quantity scale] [--seeds 5 | 101-105]
 
 Reads the campaign's cached measures (no simulation): each run's final errors on its unseen
 worlds, which `core.experiments.measures.unseen_world_states` draws again from the run's seed and
@@ -14,20 +14,20 @@ factor of the nominal box's: the friction torque with which the plane resists tu
 about the vertical grows with each of the three.
 """
 
-import argparse
-import sys
+from typing import List, Sequence
 
-from hand_codesign.analysis.campaign import load_measures
-from hand_codesign.core.experiments.catalog import EXPERIMENTS, parse_seeds
+from hand_codesign.campaign.experiment import Experiment
+from hand_codesign.campaign.folders import load_measures
 from hand_codesign.core.experiments.measures import shares_in_bands, unseen_world_states
 from hand_codesign.core.experiments.robustness import world_values
 from hand_codesign.core.sim.worlds import QUANTITIES
 from hand_codesign.core.task import load_task, TaskError
-from hand_codesign.errors import closed_stdout_status
+from hand_codesign.errors import UserError
 import numpy as np
 
 
 TURN_FRICTION = 'turn_friction'
+BAND_QUANTITIES = QUANTITIES + (TURN_FRICTION,)
 
 
 def world_quantity(world, quantity, nominal_friction):
@@ -49,43 +49,47 @@ def pooled_worlds(out, configuration, records, quantity, kind):
     return np.array(values), np.array(errors)
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
-    parser.add_argument('out', help='campaign folder')
-    parser.add_argument('experiment', choices=sorted(EXPERIMENTS))
-    parser.add_argument('--quantity', default='scale', choices=QUANTITIES + (TURN_FRICTION,))
-    parser.add_argument('--bands', type=float, nargs='+', default=[0.5, 0.75, 1, 1.25, 1.5, 2])
-    parser.add_argument('--seeds', type=parse_seeds, default='5',
-                        help='N (1 to N), A-B or A,B,...')
-    arguments = parser.parse_args()
-    experiment = EXPERIMENTS[arguments.experiment]
+def band_lines(out: str, experiment: Experiment, seeds: Sequence[int], quantity: str,
+               edges: Sequence[float]) -> List[str]:
+    """
+    Return the bands table of a campaign folder: a header line, then a line per configuration.
+
+    Args:
+        out: the campaign folder (its measures/ and tasks/).
+        experiment: the experiment the campaign ran.
+        seeds: the seeds whose measures are pooled.
+        quantity: one of BAND_QUANTITIES.
+        edges: the bands' edges in the quantity's unit, ascending (k edges, k - 1 bands).
+
+    Returns:
+        lines of text, each band as 'share % of worlds'.
+
+    Raises:
+        UserError: an unknown quantity; a folder without measures of these seeds or without a
+            configuration's task file.
+    """
+    if quantity not in BAND_QUANTITIES:
+        raise UserError(f'--quantity: expected one of {", ".join(BAND_QUANTITIES)}; got '
+                        f'{quantity!r}')
     tolerance = experiment.tolerance
-    edges = arguments.bands
-    measured = load_measures(arguments.out, experiment, arguments.seeds)
+    measured = load_measures(out, experiment, seeds)
     if not any(measured.values()):
-        sys.exit(f'within_by_world: {arguments.out}: no measures of {experiment.name} for these '
-                 f'seeds (expected measures/<configuration>-seed<N>.json, written by '
-                 f'`hand-codesign reproduce {experiment.name}`)')
-    print(f'share within ({tolerance.describe()}) by {arguments.quantity}: '
-          + ' | '.join(f'[{low:g}, {high:g})' for low, high in zip(edges, edges[1:])))
-    width = max(len(key) for key, seeds in measured.items() if seeds)
+        raise UserError(f'{out}: no measures of {experiment.name} for these seeds (expected '
+                        f'measures/<configuration>-seed<N>.json, written by `hand-codesign '
+                        f'reproduce {experiment.name}`)')
+    lines = [f'share within ({tolerance.describe()}) by {quantity}: '
+             + ' | '.join(f'[{low:g}, {high:g})' for low, high in zip(edges, edges[1:]))]
+    width = max(len(key) for key, records in measured.items() if records)
     for configuration in experiment.configurations:
         if not measured[configuration.key]:
             continue
-        values, errors = pooled_worlds(arguments.out, configuration,
-                                       measured[configuration.key], arguments.quantity,
-                                       tolerance.kind)
+        try:
+            values, errors = pooled_worlds(out, configuration, measured[configuration.key],
+                                           quantity, tolerance.kind)
+        except TaskError as error:  # a campaign folder without its configuration's task file
+            raise UserError(str(error)) from None
         cells = [f'{100 * share:3.0f} % of {worlds:4d}' if worlds else f'  - % of {worlds:4d}'
                  for _, _, worlds, share in shares_in_bands(values, errors < tolerance.limit,
                                                             edges)]
-        print(f'{configuration.key:{width}s} ' + ' | '.join(cells))
-    sys.stdout.flush()  # here, not at exit, where a reader gone would not be caught
-
-
-if __name__ == '__main__':
-    try:
-        main()
-    except TaskError as error:  # a campaign folder without its configuration's task file
-        sys.exit(f'within_by_world: {error}')
-    except BrokenPipeError as error:  # `python tools/within_by_world.py ... | head`
-        sys.exit(closed_stdout_status(error))
+        lines.append(f'{configuration.key:{width}s} ' + ' | '.join(cells))
+    return lines
