@@ -237,8 +237,8 @@ BAD_VALUES = [
     ('worlds', {'fraction': 0.5}, 'worlds.fraction: expected no fraction with aggregate: mean'),
     ('worlds', {'aggregate': 'median'}, 'worlds.aggregate: expected one of mean, worst'),
     ('worlds', {'resample': 'always'}, 'worlds.resample: expected one of none, generation'),
-    ('worlds', {'final_check': 3}, 'worlds.final_check: expected no final_check without '
-     'resample: generation'),
+    ('worlds', {'final_check': 3}, 'worlds.final_check: expected no final_check with '
+     'resample: none (only with resample: generation)'),
     ('worlds', {'resample': 'generation', 'final_check': 0}, 'worlds.final_check: expected a '
      'positive integer, got 0'),
     ('worlds', {'resample': 'generation', 'repeats': 2}, 'worlds.repeats: expected no such key'),

@@ -92,6 +92,9 @@ def header(summary):
                           f'{axes}; {len(archive["emitters"])} CMA-ES emitters of '
                           f'{" or ".join(map(str, sizes))} candidates, learning rate '
                           f'{archive["learning_rate"]:g}'))
+    if summary['changed']:
+        lines.append(wrap('settings away from their defaults (docs/TASK.md): ' + ', '.join(
+            f'{name} {_setting(value)}' for name, value in summary['changed'].items())))
     if summary['hierarchy']:
         check = budget['structures'][0]['check_world_states']
         grown = summary['hierarchy_grown']
@@ -254,6 +257,15 @@ def table(rows):
 
 def indent(text, spaces):
     return '\n'.join(' ' * spaces + line for line in text.split('\n'))
+
+
+def _setting(value):
+    """Return a setting as YAML writes it: true, 0.25, [1, 2]."""
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, list):
+        return '[' + ', '.join(_setting(item) for item in value) + ']'
+    return f'{value:g}' if isinstance(value, float) else str(value)
 
 
 def _number(value):

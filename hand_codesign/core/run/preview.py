@@ -16,6 +16,9 @@ mapping of plain lists, numbers and strings, ready for JSON::
                         coordinates
     world_scoring       {aggregate, fraction, resample, final_check}: the task's `worlds`
                         (the mean or the worst fraction of the worlds; fixed or resampled)
+    settings            every key of the task file by its dotted name, its value as read
+                        (defaults filled in; core.task.schema, docs/TASK.md)
+    changed             those of `settings` whose value is not their key's default
     hierarchy           the structures a hierarchy search may visit, e.g. [[1], [2], [1, 1]],
                         in order: its path, then the structures it may grow a finger to
                         ([1, 1, 3]); [] for a fixed structure
@@ -49,6 +52,7 @@ from hand_codesign.core.sim.objectives import goal_schedule
 from hand_codesign.core.sim.worlds import object_state, QUANTITIES, world_states
 from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.core.task.parts import QD_ALGORITHMS
+from hand_codesign.core.task.schema import away_from_defaults, settings
 
 KINDS = ('position', 'orientation')
 
@@ -82,10 +86,7 @@ def preview(task):
         'samples_per_second': task.goals.samples_per_second,
         'randomization': randomization(task),
         'worlds': worlds(task, schedule),
-        'world_scoring': {'aggregate': task.worlds.aggregate,
-                          'fraction': task.worlds.worst_fraction,
-                          'resample': task.worlds.resample,
-                          'final_check': task.worlds.final_check},
+        'world_scoring': settings(task.worlds),
         'hierarchy': [list(structure) for structure in path + grown],
         'hierarchy_grown': {'count': min(GROWN_FROM, len(grown)),
                             'choices': [list(structure) for structure in grown]},
@@ -94,6 +95,8 @@ def preview(task):
         'steps_per_evaluation': steps_per_evaluation,
         'early_termination': early_termination(task),
         'budget': budget(task, structures, grown_budgets),
+        'settings': settings(task),
+        'changed': away_from_defaults(settings(task), type(task)),
     }
 
 

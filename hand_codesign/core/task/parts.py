@@ -2,9 +2,10 @@
 The parts of a Task, as the reader builds them: the task room's shared vocabulary.
 
 Frozen dataclasses, the schema's constants and TaskError; the Task itself is in
-hand_codesign.core.task.spec, and the schema is documented in hand_codesign.core.task. This
-module imports nothing of the task room, so every other module of it (and the genome) can
-import it.
+hand_codesign.core.task.spec. Every key of a task file is a field here (or of the Task),
+declared with core.task.schema.key: its meaning, unit, default, bounds or choices and how it
+is read (docs/TASK.md is generated from them). This module imports only the schema of the task
+room, so every other module of it (and the genome) can import it.
 """
 
 from dataclasses import dataclass
@@ -12,6 +13,7 @@ from typing import Any, Optional, Tuple
 
 from hand_codesign.core.outcomes import OUTCOME_NAMES
 from hand_codesign.core.rotations import rotation_matrix
+from hand_codesign.core.task.schema import Depends, GIVEN, key
 import numpy as np
 
 SHAPES = ('sphere', 'box', 'capsule')
@@ -62,83 +64,129 @@ class Bounds:
 class ObjectSpec:
     """The manipulated object, nominal (before domain randomization)."""
 
-    shape: str  # 'sphere' | 'box' | 'capsule'
-    mass: float  # kg
-    friction: float
-    start: str  # 'plane' | 'midair'
-    position: Tuple[float, float, float]  # world frame, m
-    orientation: Tuple[float, float, float, float]  # unit quaternion x, y, z, w
-    size: Optional[Tuple[float, float, float]] = None  # box: full edge lengths
-    radius: Optional[float] = None  # sphere, capsule
-    length: Optional[float] = None  # capsule: cylinder length, caps excluded (Bullet's height)
+    shape: str = key('the shape of the object', 'choice', choices=SHAPES)
+    mass: float = key('its mass', 'number', unit='kg', positive=True)
+    friction: float = key('its lateral friction coefficient', 'number', minimum=0)
+    start: str = key('where it starts: resting on the plane, or in mid-air', 'choice',
+                     choices=STARTS)
+    position: Tuple[float, float, float] = key(
+        'its nominal centre, world frame; resting on the plane, z is its resting height',
+        'vector', unit='m', size=3)
+    orientation: Tuple[float, float, float, float] = key(
+        'its nominal orientation: a quaternion [x, y, z, w] or {axis: [x, y, z], angle: rad}',
+        'quaternion')
+    size: Optional[Tuple[float, float, float]] = key(
+        "a box's full edge lengths (one number: a cube)", 'custom', unit='m', read='box_size',
+        values='3 numbers, each > 0 (or one: a cube)',
+        when=('shape', ('box',), 'for a {}'), field_default=None)
+    radius: Optional[float] = key(
+        "a sphere's or a capsule's radius", 'number', unit='m', positive=True,
+        when=('shape', ('sphere', 'capsule'), 'for a {}'), field_default=None)
+    length: Optional[float] = key(
+        "a capsule's cylinder length, its caps excluded (Bullet's height)", 'number', unit='m',
+        positive=True, when=('shape', ('capsule',), 'for a {}'), field_default=None)
 
 
 @dataclass(frozen=True)
 class HandSpec:
     """Where the hand is and the sizes the genome does not optimize."""
 
-    base_position: Tuple[float, float, float]
-    base_orientation: Tuple[float, float, float, float]  # x, y, z, w
-    palm_size: Tuple[float, float, float]  # full extents along the hand's x, y, z
-    segment_radius: float
-    segment_density: float  # kg / m^3
-    palm_mass: float = 0.1
+    base_position: Tuple[float, float, float] = key(
+        "the palm centre's position, the hand's fixed base", 'vector', unit='m', size=3)
+    base_orientation: Tuple[float, float, float, float] = key(
+        "the hand frame's orientation (the palm's normal is its +y): a quaternion [x, y, z, w] "
+        'or {axis, angle}', 'quaternion')
+    palm_size: Tuple[float, float, float] = key(
+        "the palm's full extents along the hand's x, y (its normal) and z", 'vector', unit='m',
+        size=3, positive=True)
+    segment_radius: float = key('the capsule radius of every finger segment', 'number',
+                                unit='m', positive=True)
+    segment_density: float = key('the density of the segments', 'number', unit='kg/m^3',
+                                 positive=True)
+    palm_mass: float = key("the palm's mass (the palm is fixed; for export)", 'number',
+                           unit='kg', positive=True, default=0.1)
 
 
 @dataclass(frozen=True)
 class PositionGoal:
     """Object position `position` (world, m) wanted at `time` (s), measured along `axes`."""
 
-    time: float
-    position: Tuple[float, float, float]
-    trajectory: bool  # also score interpolated goals from the previous goal (III.C)
-    axes: Tuple[str, ...] = AXES  # the world axes eq. (3) measures, in x, y, z order
+    time: float = key('when the goal holds; strictly after the previous goal', 'number',
+                      unit='s', positive=True)
+    position: Tuple[float, float, float] = key('the wanted position of the object, world frame',
+                                               'vector', unit='m', size=3)
+    # also score interpolated goals from the previous goal (III.C)
+    trajectory: bool = key('also score goals interpolated from the previous goal (III.C)',
+                           'boolean')
+    # the world axes eq. (3) measures, in x, y, z order
+    axes: Tuple[str, ...] = key(
+        'the world axes the distance measures, e.g. [x, y]: the plane of the table', 'custom',
+        read='goal_axes', default=AXES, values='distinct axes of x, y, z')
 
 
 @dataclass(frozen=True)
 class OrientationGoal:
     """Object orientation `orientation` (quaternion x, y, z, w) wanted at `time` (s)."""
 
-    time: float
-    orientation: Tuple[float, float, float, float]
-    trajectory: bool
+    time: float = key('when the goal holds; strictly after the previous goal', 'number',
+                      unit='s', positive=True)
+    orientation: Tuple[float, float, float, float] = key(
+        'the wanted orientation: a quaternion [x, y, z, w] or {axis, angle}', 'quaternion')
+    trajectory: bool = key('also score goals interpolated (slerp) from the previous goal',
+                           'boolean')
 
 
 @dataclass(frozen=True)
 class SymmetrySpec:
     """The object looks the same turned by k * 2 pi / order about `axis` (object frame)."""
 
-    axis: Tuple[float, float, float]  # unit vector in the object's own frame
-    order: int  # >= 2: the number of turns (including none) that look the same
+    axis: Tuple[float, float, float] = key("the axis of symmetry, in the object's own frame",
+                                           'unit_vector')
+    order: int = key('how many turns about it look the same (a cube: 4)', 'integer', minimum=2)
 
 
 @dataclass(frozen=True)
 class GoalSpec:
     """The position and orientation goals; goal 0 is the object's nominal start pose."""
 
-    distance: str  # 'euclidean' | 'manhattan'
-    position: Tuple[PositionGoal, ...]
-    orientation: Tuple[OrientationGoal, ...]
-    samples_per_second: float = 10.0
+    distance: str = key('the distance of position goals (eq. 3)', 'choice', choices=DISTANCES)
+    position: Tuple[PositionGoal, ...] = key(
+        'the position goals, in time order (may be []; at least one goal in all)', 'section',
+        section=PositionGoal, listed=True, read='goal_list')
+    orientation: Tuple[OrientationGoal, ...] = key(
+        'the orientation goals, in time order (may be [])', 'section', section=OrientationGoal,
+        listed=True, read='goal_list')
+    samples_per_second: float = key("the spacing of a trajectory's interpolated goals",
+                                    'number', unit='1/s', positive=True, default=10.0)
     # False: goals are absolute world poses. True: goals are given for the nominal start and
     # each world's goals move with its start (shifted by its position offset, turned by its
     # orientation delta), so randomizing the start never counts as an error by itself.
-    relative_to_start: bool = False
+    relative_to_start: bool = key(
+        "move each world's goals with its start (false: absolute world poses)", 'boolean',
+        default=False)
     # None: every turn of the object counts (eq. 4). Otherwise orientation goals score the
     # nearest of the object's symmetric turns.
-    orientation_symmetry: Optional[SymmetrySpec] = None
+    orientation_symmetry: Optional[SymmetrySpec] = key(
+        'the object looks the same turned about an axis: orientation goals score the nearest '
+        'such turn (none: every turn counts, eq. 4)', 'section', section=SymmetrySpec,
+        default=None)
 
 
 @dataclass(frozen=True)
 class RandomizationSpec:
     """Domain randomization ranges; each world draws every quantity uniformly."""
 
-    position: Tuple[Bounds, Bounds, Bounds]  # delta along world x, y, z, m
-    orientation_axis: Tuple[float, float, float]  # unit vector, world frame
-    orientation: Bounds  # delta angle about orientation_axis, rad
-    friction: Bounds  # delta added to the object's friction
-    scale: Bounds  # factor on every object dimension
-    mass: Bounds  # factor on the object's mass
+    position: Tuple[Bounds, Bounds, Bounds] = key(
+        'the start position offset along world x, y and z: {x: [l, u], y: [l, u], z: [l, u]}',
+        'custom', unit='m', read='axis_ranges', values='{x, y, z}, each [lower, upper]')
+    orientation_axis: Tuple[float, float, float] = key(
+        'the axis of the start orientation offset, world frame', 'unit_vector',
+        yaml='orientation.axis')
+    orientation: Bounds = key('the start orientation offset: an angle about that axis',
+                              'bounds', unit='rad', angle=True, yaml='orientation.range')
+    friction: Bounds = key("an offset added to the object's friction", 'bounds')
+    scale: Bounds = key('a factor on every dimension of the object', 'bounds', positive=True)
+    mass: Bounds = key("a factor on the object's mass", 'bounds', positive=True)
 
     def quantities(self):
         """Return (name, Bounds) of all seven quantities in WorldState order."""
@@ -170,29 +218,60 @@ class ParameterSpec:
 class MorphologySpec:
     """Settings of the hand parameters of section III.B (Table I, morphology rows)."""
 
-    initial_angle: ParameterSpec  # per joint, rad
-    finger_position_x: ParameterSpec  # per finger, m, hand frame
-    finger_position_z: ParameterSpec
-    segment_length: ParameterSpec  # per joint (segment), m
-    axis_angle: ParameterSpec  # per joint, rad
-    joint_limits: ParameterSpec  # per joint, rad; mode 'none': no limits
-    friction: ParameterSpec  # one for the hand
+    initial_angle: ParameterSpec = key("each joint's angle at the start", 'parameter',
+                                       unit='rad', per_joint=True, angle=True)
+    finger_position_x: ParameterSpec = key("each finger's place on the palm along the hand's x",
+                                           'parameter', unit='m')
+    finger_position_z: ParameterSpec = key("each finger's place on the palm along the hand's z",
+                                           'parameter', unit='m')
+    segment_length: ParameterSpec = key(
+        "each segment's length (per_finger_total: bounds for the whole finger)", 'parameter',
+        unit='m', per_joint=True, total=True)
+    axis_angle: ParameterSpec = key("each joint axis's angle in the palm's plane", 'parameter',
+                                    unit='rad', per_joint=True, angle=True)
+    joint_limits: ParameterSpec = key(
+        "each joint's lower and upper limit (fixed: a pair [lower, upper]; none: no limits)",
+        'custom', unit='rad', read='limits_setting',
+        values='a setting as the others, or none')
+    friction: ParameterSpec = key("the hand's friction coefficient", 'parameter', minimum=0)
 
 
 @dataclass(frozen=True)
 class PolicySpec:
     """The control policy and its bounds; fields of the other kind are None."""
 
-    kind: str  # 'torque' | 'pd'
-    duration: float  # s
-    gravity_compensation: bool
-    mode: Optional[str] = None  # torque: 'constant' | 'interpolated'
-    knots: Optional[int] = None  # torque: K values per joint
-    torque: Optional[ParameterSpec] = None  # torque: N m per joint and knot
-    keyframe_times: Optional[Tuple[float, ...]] = None  # pd: s, strictly increasing, > 0
-    target: Optional[ParameterSpec] = None  # pd: target joint angles, rad
-    kp: Optional[ParameterSpec] = None  # pd: p coefficient per joint
-    kd: Optional[ParameterSpec] = None  # pd: d coefficient per joint
+    kind: str = key('the control policy: torques over time (III.B), or feed-forward PD (eq. 1)',
+                    'choice', choices=POLICY_KINDS)
+    duration: float = key('how long the policy acts; zero torque (plus gravity compensation) '
+                          'afterwards', 'number', unit='s', positive=True)
+    gravity_compensation: bool = key(
+        'add the torques that hold the fingers against gravity', 'boolean',
+        default=Depends('kind', (('torque', False), ('pd', True))),
+        default_text='false for torque, true for pd')
+    mode: Optional[str] = key(
+        'constant: each of the knots holds over an equal interval; interpolated: linear '
+        'between them', 'choice', choices=TORQUE_MODES,
+        when=('kind', ('torque',), 'for a {} policy'), field_default=None)
+    knots: Optional[int] = key('the torques K per joint', 'integer',
+                               when=('kind', ('torque',), 'for a {} policy'), field_default=None)
+    torque: Optional[ParameterSpec] = key(
+        'the torques, per finger (applying to all its joints)', 'parameter', unit='N m',
+        when=('kind', ('torque',), 'for a {} policy'), field_default=None)
+    keyframe_times: Optional[Tuple[float, ...]] = key(
+        'when each target holds, strictly increasing, within the duration', 'custom', unit='s',
+        read='keyframes', values='a list of numbers > 0',
+        when=('kind', ('pd',), 'for a {} policy'), field_default=None)
+    target: Optional[ParameterSpec] = key(
+        'the target joint angles of each keyframe, per finger', 'parameter', unit='rad',
+        angle=True, when=('kind', ('pd',), 'for a {} policy'), field_default=None)
+    kp: Optional[ParameterSpec] = key('the p coefficient, per finger', 'parameter',
+                                      unit='N m/rad', minimum=0,
+                                      when=('kind', ('pd',), 'for a {} policy'),
+                                      field_default=None)
+    kd: Optional[ParameterSpec] = key('the d coefficient, per finger', 'parameter',
+                                      unit='N m s/rad', minimum=0,
+                                      when=('kind', ('pd',), 'for a {} policy'),
+                                      field_default=None)
 
     @property
     def num_knots(self):
@@ -204,27 +283,38 @@ class PolicySpec:
 class TorquePenaltySpec:
     """Equation (2): weight * (max |tau| - threshold) when max |tau| > threshold."""
 
-    threshold: float  # tau_p, N m
-    weight: float  # w in (0, 1)
+    threshold: float = key('tau_p of eq. (2): the torque above which the penalty counts',
+                           'number', unit='N m', minimum=0)
+    weight: float = key('w of eq. (2)', 'number', positive=True, interval='(0, 1)',
+                        noun='a weight w')
 
 
 @dataclass(frozen=True)
 class HorizonSpec:
     """The growing horizon of early_termination.horizon (hand_codesign.core.search.horizon)."""
 
-    start: float  # s, the first horizon
-    step: float  # s, how much it grows at a time
-    share: float  # of a generation that must track within the margins before it grows
+    start: float = key('the first horizon', 'number', unit='s', positive=True, default=GIVEN,
+                       default_text='one check interval')
+    step: float = key('how much the horizon grows at a time', 'number', unit='s',
+                      positive=True, default=GIVEN, default_text='one check interval')
+    share: float = key('the share of a generation that must score at most the margins in '
+                       'every objective before the horizon grows', 'number', positive=True,
+                       interval='(0, 1]', noun='a share', default=0.5)
 
 
 @dataclass(frozen=True)
 class EarlyTerminationSpec:
     """Equation (6): stop a rollout when a goal misses by more than d_s or theta_s."""
 
-    distance: float  # d_s, m
-    angle: float  # theta_s, rad
-    checks_per_second: float = 10.0
-    horizon: Optional[HorizonSpec] = None  # sub-problems of growing horizon (horizon.py)
+    distance: float = key('d_s of eq. (6): stop a rollout whose position misses by more',
+                          'number', unit='m', positive=True)
+    angle: float = key('theta_s of eq. (6): stop a rollout whose orientation misses by more',
+                       'number', unit='rad', positive=True, angle=True)
+    checks_per_second: float = key('how often the margins are checked', 'number', unit='1/s',
+                                   positive=True, default=10.0)
+    horizon: Optional[HorizonSpec] = key(
+        'sub-problems of growing horizon (core.search.horizon); none: whole rollouts',
+        'section', section=HorizonSpec, default=None)
 
 
 @dataclass(frozen=True)
@@ -237,19 +327,24 @@ class PhysicsSpec:
     how much faster and whether the ranking of designs and their robustness stay the same.
     """
 
-    solver_iterations: int = 50
-    contact_breaking_threshold: float = 0.02  # m
+    solver_iterations: int = key("Bullet's solver iterations per step", 'integer', default=50)
+    contact_breaking_threshold: float = key(
+        'how far apart Bullet keeps contact points', 'number', unit='m', positive=True,
+        default=0.02)
     # 'pybullet' (Table I's runs) or 'mujoco' (core.sim.mujoco_sim, whose own contact settings
     # are fixed there; the two Bullet settings above do not apply to it)
-    engine: str = 'pybullet'
+    engine: str = key('the physics engine (MuJoCo ignores the two Bullet settings)', 'choice',
+                      choices=ENGINES, default='pybullet')
 
 
 @dataclass(frozen=True)
 class WeightsSpec:
     """Weights of the weighted-sum fitness: w_p for positions, w_r for orientations."""
 
-    position: float = 1.0
-    orientation: float = 0.1
+    position: float = key('w_p: the weight of every position objective in the fitness',
+                          'number', minimum=0, default=1.0)
+    orientation: float = key('w_r: the weight of every orientation objective in the fitness',
+                             'number', minimum=0, default=0.1)
 
 
 @dataclass(frozen=True)
@@ -269,10 +364,20 @@ class WorldsSpec:
     of a generation tracks within the margins in its worst worlds, so later than on average.
     """
 
-    aggregate: str = 'mean'
-    fraction: float = 1.0  # of the worlds averaged with aggregate 'worst'; 1 with 'mean'
-    resample: str = 'none'
-    final_check: int = FINAL_CHECK
+    aggregate: str = key('how the worlds score a candidate: the mean (eq. 5), or the mean of '
+                         'its worst fraction of the worlds (CVaR)', 'choice',
+                         choices=WORLD_AGGREGATES, default='mean')
+    # of the worlds averaged with aggregate 'worst'; 1 with 'mean'
+    fraction: float = key('the share of the worst worlds each objective averages', 'number',
+                          interval='(0, 1]', noun='a fraction',
+                          when=('aggregate', ('worst',), 'with aggregate: {}'),
+                          field_default=1.0)
+    resample: str = key('the worlds a candidate meets: one fixed set, or a fresh draw each '
+                        'generation', 'choice', choices=WORLD_RESAMPLING, default='none')
+    final_check: int = key(
+        'the last generations whose best designs are checked on the fixed worlds; the best '
+        "there is the run's result", 'integer', default=FINAL_CHECK,
+        when=('resample', ('generation',), 'with resample: {}'))
 
     @property
     def worst_fraction(self):
@@ -294,24 +399,47 @@ class ArchiveSpec:
     0.01) is CMA-MAE's alpha.
     """
 
-    descriptors: Optional[Tuple[str, ...]] = None
-    cells: Tuple[int, ...] = (10, 10)
-    ranges: Optional[Tuple[Tuple[float, float], ...]] = None
-    emitters: Optional[int] = None
-    learning_rate: Optional[float] = None
+    descriptors: Optional[Tuple[str, ...]] = key(
+        "the two descriptors the archive's grid spans: of the design (core.task.descriptors) "
+        "or of its rollouts' outcome (core.outcomes)", 'custom', choices=ARCHIVE_DESCRIPTOR_NAMES,
+        read='archive_descriptors', default=None,
+        values='two different names of: ' + ', '.join(ARCHIVE_DESCRIPTOR_NAMES),
+        default_text='finger_length, joint_range (initial_angle without joint limits)')
+    cells: Tuple[int, ...] = key('the cells of the grid along each descriptor', 'custom',
+                                 read='archive_cells', default=(10, 10),
+                                 values='two whole numbers >= 1')
+    ranges: Optional[Tuple[Tuple[float, float], ...]] = key(
+        "the grid's extent along each descriptor: [[l0, u0], [l1, u1]]", 'custom',
+        read='archive_ranges', default=None, values='two pairs [lower, upper], lower < upper',
+        default_text="the least and greatest value on the genome's bounds ([0, 1] for an "
+                     'outcome)')
+    emitters: Optional[int] = key('the CMA-ES emitters sharing the population', 'integer',
+                                  default=None, default_text='population // 10, at least 1')
+    learning_rate: Optional[float] = key("CMA-MAE's alpha (cma-me: always 1)", 'number',
+                                         interval='[0, 1]', default=None, default_text='0.01')
 
 
 @dataclass(frozen=True)
 class HierarchySpec:
     """The bottom-up search over hand structures of Fig. 1."""
 
-    start: Tuple[int, ...]
-    position_threshold: float
-    orientation_threshold: float
-    evaluation_world_states: int
-    stop_structure: Optional[Tuple[int, ...]] = None
-    max_fingers: Optional[int] = None
-    max_joints: Optional[int] = None
+    start: Tuple[int, ...] = key('the first structure: joints per finger, e.g. [1]',
+                                 'structure')
+    position_threshold: float = key(
+        "stop at the structure whose best design's position errors are below this (and its "
+        'orientation errors below orientation_threshold)', 'number', unit='m', minimum=0)
+    orientation_threshold: float = key(
+        "stop at the structure whose best design's orientation errors are below this (and its "
+        'position errors below position_threshold)', 'number', unit='rad', minimum=0,
+        angle=True)
+    evaluation_world_states: int = key(
+        'the held-out worlds the best design of each structure is checked on', 'integer')
+    stop_structure: Optional[Tuple[int, ...]] = key('the last structure', 'structure',
+                                                    default=None)
+    max_fingers: Optional[int] = key('the most fingers a structure may have', 'integer',
+                                     default=None)
+    max_joints: Optional[int] = key('the most joints a finger may have', 'integer',
+                                    default=None)
 
 
 def resting_height(object_spec, scale=1.0, orientation=None):

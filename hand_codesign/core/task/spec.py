@@ -1,8 +1,8 @@
 """
 The Task: one frozen value holding a whole task, built by the reader and checked by the checks.
 
-Its parts (and TaskError) are in hand_codesign.core.task.parts; the schema is documented in
-hand_codesign.core.task.
+Its parts (and TaskError) are in hand_codesign.core.task.parts; every key of a task file is a
+field declared with core.task.schema.key, here or there (docs/TASK.md lists them).
 """
 
 import dataclasses
@@ -11,10 +11,12 @@ from typing import Optional, Tuple
 
 from hand_codesign.core.design import Design
 from hand_codesign.core.task.checks import check_task
-from hand_codesign.core.task.parts import (ArchiveSpec, EarlyTerminationSpec, GoalSpec, HandSpec,
-                                           HierarchySpec, MorphologySpec, ObjectSpec, PhysicsSpec,
-                                           PolicySpec, RandomizationSpec, TaskError,
-                                           TorquePenaltySpec, WeightsSpec, WorldsSpec)
+from hand_codesign.core.task.parts import (ALGORITHMS, ArchiveSpec, EarlyTerminationSpec,
+                                           GoalSpec, HandSpec, HierarchySpec, MorphologySpec,
+                                           ObjectSpec, PhysicsSpec, PolicySpec,
+                                           RandomizationSpec, TaskError, TorquePenaltySpec,
+                                           WeightsSpec, WorldsSpec)
+from hand_codesign.core.task.schema import GIVEN, key
 from hand_codesign.core.task.variant import Variant
 import numpy as np
 
@@ -24,46 +26,85 @@ VARIANT_COORDINATES = ('horizon', 'stage', 'held_out', 'world_draw')
 
 @dataclass(frozen=True)
 class Task:
-    """A whole task; see the module docstring for the YAML schema and units."""
+    """A whole task: the task file's keys (docs/TASK.md), and where it came from."""
 
-    name: str
-    seed: int
-    time_step: float
-    duration: float
-    object_spec: ObjectSpec
-    hand: HandSpec
-    structure: Tuple[int, ...]
-    goals: GoalSpec
-    randomization: RandomizationSpec
-    num_world_states: int
-    morphology: MorphologySpec
-    policy: PolicySpec
-    algorithm: str
-    iterations: int
-    population: int
-    initial_sigma: float = 0.1
+    name: str = key('identifies the task in runs, bags and plots', 'text', positive=True)
+    seed: int = key('seeds the world states and the optimizer', 'integer', minimum=0)
+    time_step: float = key('the physics step', 'number', unit='s', positive=True)
+    duration: float = key('the simulated time of one rollout (a whole number of steps)',
+                          'number', unit='s', positive=True)
+    object_spec: ObjectSpec = key('the object the hand manipulates, nominal', 'section',
+                                  section=ObjectSpec, yaml='object')
+    hand: HandSpec = key('where the hand is, and the sizes the genome does not optimize',
+                         'section', section=HandSpec)
+    structure: Tuple[int, ...] = key(
+        'joints per finger, e.g. [2, 2]', 'structure', yaml='hand.structure', default=GIVEN,
+        default_text="the hierarchy's start")
+    goals: GoalSpec = key('what the object must do: position and orientation goals (III.C)',
+                          'section', section=GoalSpec, read='goals')
+    randomization: RandomizationSpec = key(
+        'domain randomization: each world draws every quantity uniformly in its range',
+        'section', section=RandomizationSpec)
+    num_world_states: int = key('the randomized worlds every candidate is evaluated on',
+                                'integer')
+    morphology: MorphologySpec = key(
+        'the hand parameters (III.B): each a setting {fixed: v}, {bounds: [l, u]}, '
+        '{delta: [l, u]} or seed', 'section', section=MorphologySpec)
+    policy: PolicySpec = key('the control policy and the bounds of its values', 'section',
+                             section=PolicySpec)
+    algorithm: str = key('the optimizer: CMA-ES on the weighted sum, MO-CMA-ES on the Pareto '
+                         'front, CMA-ES with restarts, or quality diversity', 'choice',
+                         choices=ALGORITHMS, yaml='optimizer.algorithm')
+    iterations: int = key('generations (per hand structure)', 'integer',
+                          yaml='optimizer.iterations')
+    population: int = key('candidates per generation', 'integer', yaml='optimizer.population')
+    initial_sigma: float = key('the initial step size, in the normalized genome space',
+                               'number', positive=True, default=0.1,
+                               yaml='optimizer.initial_sigma')
     # generations without improvement after which ipop-cma / bipop-cma restart
     # (core.search.restarts); None: their default window
-    restart_stagnation: Optional[int] = None
+    restart_stagnation: Optional[int] = key(
+        'ipop-cma, bipop-cma: generations without improvement that end a CMA-ES instance',
+        'integer', default=None, default_text="pycma's window",
+        yaml='optimizer.restart_stagnation')
     # the archive of cma-mae / cma-me (core.search.quality_diversity); None: ArchiveSpec's defaults
-    archive: Optional[ArchiveSpec] = None
-    weights: WeightsSpec = WeightsSpec()
-    physics: PhysicsSpec = PhysicsSpec()
-    worlds: WorldsSpec = WorldsSpec()
-    torque_penalty: Optional[TorquePenaltySpec] = None
-    early_termination: Optional[EarlyTerminationSpec] = None
-    hierarchy: Optional[HierarchySpec] = None
-    seed_design: Optional[Design] = None
+    archive: Optional[ArchiveSpec] = key(
+        'cma-mae, cma-me: the archive of designs, a grid over two descriptors', 'section',
+        section=ArchiveSpec, default=None, default_text='the defaults of its keys',
+        yaml='optimizer.archive')
+    weights: WeightsSpec = key('the weights of the weighted-sum fitness', 'section',
+                               section=WeightsSpec, default={}, field_default=WeightsSpec())
+    physics: PhysicsSpec = key("the physics engine and Bullet's settings (defaults: Table I's "
+                               'runs)', 'section', section=PhysicsSpec, default={},
+                               field_default=PhysicsSpec())
+    worlds: WorldsSpec = key('how the worlds score a candidate and which worlds it meets',
+                             'section', section=WorldsSpec, default={},
+                             field_default=WorldsSpec())
+    torque_penalty: Optional[TorquePenaltySpec] = key(
+        'eq. (2): a penalty on torques above a threshold', 'section', section=TorquePenaltySpec,
+        default=None)
+    early_termination: Optional[EarlyTerminationSpec] = key(
+        'eq. (6): stop a rollout whose goals miss by more than a margin', 'section',
+        section=EarlyTerminationSpec, default=None, read='early_termination')
+    hierarchy: Optional[HierarchySpec] = key(
+        'search hand structures bottom-up (Fig. 1)', 'section', section=HierarchySpec,
+        default=None)
+    seed_design: Optional[Design] = key(
+        'a starting design (seeded search, Tasks 1 and 2): inline, or a file relative to the '
+        'task file', 'custom', read='seed_design_of', default=None,
+        values='a design mapping (below), or a file name')
     # YAML `two_stage: true`: stage 1 optimizes on the nominal world only, stage 2 with the
     # randomization, starting from stage 1's result (core.search.stages).
-    two_stage: bool = False
+    two_stage: bool = key('stage 1 on the nominal world only, then stage 2 on the randomized '
+                          "worlds from stage 1's result (Tasks 1 and 2)", 'boolean',
+                          default=False)
     # Not in the YAML: which version of the run's task this is (core.task.variant), set by the
     # search and carried in the Candidate message: its horizon, stage, held-out worlds and
     # resampled draw (read as task.horizon, task.stage, task.held_out, task.world_draw). The
     # variant's structure and world states are applied to `structure` and `num_world_states`,
     # so here they stay () and 0.
     variant: Variant = Variant()
-    description: str = ''
+    description: str = key('free text', 'text', default='', default_text='empty')
     source: str = '<task>'
     source_text: str = ''
 
