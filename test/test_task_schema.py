@@ -1,7 +1,13 @@
-"""The task file's schema, declared once: its table in docs/TASK.md, a new key as one field."""
+"""
+The task file's schema, declared once, and the presets `reproduce` runs.
+
+Its table in docs/TASK.md, a new key as one field, and each pinned preset against its
+namesake in config/tasks/.
+"""
 
 import dataclasses
 import pathlib
+import re
 
 from hand_codesign.core.task import load_task
 from hand_codesign.core.task.document import with_keys
@@ -10,8 +16,12 @@ from hand_codesign.core.task.schema import entries, key, rows, settings
 from hand_codesign.core.task.spec import Task
 from hand_codesign.core.task.values import ValueReader
 import pytest
+import yaml
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
+PINNED = sorted((ROOT / 'config' / 'reproduce').glob('*.yaml'))
+DECLARED = re.compile(r'(Same as|Differs from) (config/tasks/[\w.]+\.yaml) in '
+                      r'(every key|[\w.]+(?:, [\w.]+)*)[:,.]?\s*(.*)$')
 
 
 def test_docs_task_md_is_what_the_schema_writes():
@@ -42,3 +52,43 @@ def test_a_new_key_is_one_field():
                                         r'integer, got 0'):
         reader.section(Worlds, {'repeats': 0}, 'worlds')
     assert 'repeats' in [entry.field for entry in entries(Worlds)]
+
+
+def declared(path):
+    """Return (namesake, keys it differs in or None for none, why) of a pinned preset."""
+    header = []
+    for line in path.read_text(encoding='utf-8').splitlines():
+        if not line.startswith('#'):
+            break
+        header.append(line.lstrip('# ').strip())
+    text = ' '.join(header)
+    found = [DECLARED.search(sentence) for sentence in re.split(r'(?<=\.) (?=[A-Z])', text)]
+    match = next((item for item in found if item), None)
+    assert match, f'{path.name}: its header says "Same as config/tasks/X.yaml in every key" or ' \
+                  '"Differs from config/tasks/X.yaml in KEY, ...: why"'
+    kind, namesake, keys, why = match.groups()
+    named = None if keys == 'every key' else {name.strip() for name in keys.split(',')}
+    return ROOT / namesake, named, (why or '').strip()
+
+
+def differences(first, second):
+    """Return the keys (section.key, or a top-level key) whose values differ."""
+    def flat(document):
+        found = {}
+        for name, value in document.items():
+            if isinstance(value, dict) and name not in ('description',):
+                found.update({f'{name}.{inner}': item for inner, item in value.items()})
+            else:
+                found[name] = value
+        return found
+    one, two = flat(yaml.safe_load(first.read_text())), flat(yaml.safe_load(second.read_text()))
+    return {name for name in set(one) | set(two) if one.get(name) != two.get(name)}
+
+
+@pytest.mark.parametrize('path', PINNED, ids=[path.name for path in PINNED])
+def test_a_pinned_preset_differs_from_its_namesake_only_where_its_header_says_why(path):
+    namesake, named, why = declared(path)
+    assert namesake.exists(), namesake
+    assert differences(namesake, path) == (named or set()), path.name
+    if named:
+        assert why, f'{path.name}: say why it differs'
