@@ -24,8 +24,9 @@ MuJoCo compile about 1.5 ms) eight times as much as one on 64. Then the same can
 two processes at once, per engine (wall seconds of the slower): a run's two evaluators share
 the machine's two cores, its caches and memory, and an engine may suffer more from that.
 
-Usage: python bench/bench_engines.py [--tasks task5 task6 | task1 task5_pd] [--designs 200] [--generations 25] [--popsize 16]
-       [--world-states 8] [--speed-sample 12] [--rounds 3] [--collision-pairs 1000]
+Usage: python bench/bench_engines.py [--tasks task5 task6 | task1 task5_pd] [--designs 200]
+       [--generations 25] [--popsize 16] [--world-states 8] [--speed-sample 12] [--rounds 3]
+       [--collision-pairs 1000]
        python bench/bench_engines.py --bags BAG [BAG ...] [--speed-sample 12] [--rounds 3]
 """
 
