@@ -30,8 +30,10 @@ from hand_codesign.analysis.bag import read_run
 from hand_codesign.core.contract import STATUS_NAMES
 from hand_codesign.core.contract import STATUS_OK
 from hand_codesign.core.outcomes import Answer
+from hand_codesign.core.outcomes import objectives_of
 from hand_codesign.core.search.optimizers import OptimizerError
 from hand_codesign.core.search.optimizers import replay
+from hand_codesign.core.search.racing import RacedAnswer
 from hand_codesign.core.search.search import Search
 from hand_codesign.core.task import TaskError
 from hand_codesign.core.task.parts import QD_ALGORITHMS
@@ -394,6 +396,40 @@ def told_objectives(record):
     return told
 
 
+def told_worlds(record):
+    """
+    Return {candidate id: (worlds met, the batch's worlds)} of a raced run's summaries.
+
+    Racing (core.search.racing) records per told candidate the worlds it met (told_worlds);
+    at least mu candidates of a batch meet all of them, so the most any met is the batch's.
+    Empty for a run without racing (and bags older than the field).
+    """
+    summaries = record.generation_summaries
+    met = {}
+    if not len(summaries) or 'told_worlds' not in summaries:
+        return met
+    for index in range(len(summaries)):
+        worlds = np.asarray(summaries['told_worlds'][index]).ravel()
+        ids = np.asarray(summaries['told_ids'][index]).ravel()
+        if worlds.dtype.kind == 'f':   # the table pads the empty lists of some rows with NaN
+            worlds, ids = worlds[np.isfinite(worlds)], ids[np.isfinite(ids)]
+        if not len(worlds) or len(worlds) != len(ids):
+            continue
+        most = int(worlds.max())
+        for candidate_id, count in zip(ids.astype(np.uint64).tolist(), worlds.tolist()):
+            met.setdefault(int(candidate_id), (int(count), most))
+    return met
+
+
+def with_worlds(recorded, worlds):
+    """Return recorded with a RacedAnswer for each candidate a race stopped early."""
+    raced = dict(recorded)
+    for candidate_id, (count, most) in worlds.items():
+        if candidate_id in raced and count < most:
+            raced[candidate_id] = RacedAnswer(objectives_of(raced[candidate_id]), count, False)
+    return raced
+
+
 def recorded_evaluations(record):
     """
     Return {candidate id: objectives} of every candidate the bag holds a result for.
@@ -410,12 +446,14 @@ def recorded_evaluations(record):
         objectives = rows.objectives[index]
         if candidate_id not in recorded and np.all(np.isfinite(objectives)):
             recorded[candidate_id] = objectives.copy()
-    return with_outcomes(recorded, told_outcomes(record, rows))
+    return with_worlds(with_outcomes(recorded, told_outcomes(record, rows)),
+                       told_worlds(record))
 
 
 def told_answers(record):
-    """Return {candidate id: objectives or Answer} as told to the optimizer (summaries)."""
-    return with_outcomes(told_objectives(record), told_outcomes(record))
+    """Return {candidate id: objectives, Answer or RacedAnswer} as told to the optimizer."""
+    return with_worlds(with_outcomes(told_objectives(record), told_outcomes(record)),
+                       told_worlds(record))
 
 
 def told_outcomes(record, rows=None):

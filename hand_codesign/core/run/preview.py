@@ -14,8 +14,10 @@ mapping of plain lists, numbers and strings, ready for JSON::
                         orientation or None, objectives}] in world coordinates, and `samples`:
                         every goal sample a trajectory objective scores, also in world
                         coordinates
-    world_scoring       {aggregate, fraction, resample, final_check}: the task's `worlds`
-                        (the mean or the worst fraction of the worlds; fixed or resampled)
+    world_scoring       {aggregate, fraction, resample, final_check, racing}: the task's
+                        `worlds` (the mean or the worst fraction of the worlds; fixed or
+                        resampled); racing None, or {rounds, range, delta, bounds}: the world
+                        indices where a generation's rounds start and end (core.search.racing)
     hierarchy           the structures a hierarchy search may visit, e.g. [[1], [2], [1, 1]],
                         in order: its path, then the structures it may grow a finger to
                         ([1, 1, 3]); [] for a fixed structure
@@ -44,6 +46,7 @@ from hand_codesign.core.search.hierarchy import grown_choices
 from hand_codesign.core.search.hierarchy import GROWN_FROM
 from hand_codesign.core.search.hierarchy import grows_fingers
 from hand_codesign.core.search.hierarchy import REPEATS
+from hand_codesign.core.search.racing import round_bounds
 from hand_codesign.core.sim.events import EventPlan
 from hand_codesign.core.sim.objectives import goal_schedule
 from hand_codesign.core.sim.worlds import object_state, QUANTITIES, world_states
@@ -85,7 +88,8 @@ def preview(task):
         'world_scoring': {'aggregate': task.worlds.aggregate,
                           'fraction': task.worlds.worst_fraction,
                           'resample': task.worlds.resample,
-                          'final_check': task.worlds.final_check},
+                          'final_check': task.worlds.final_check,
+                          'racing': racing(task)},
         'hierarchy': [list(structure) for structure in path + grown],
         'hierarchy_grown': {'count': min(GROWN_FROM, len(grown)),
                             'choices': [list(structure) for structure in grown]},
@@ -216,9 +220,21 @@ def archive_preview(task):
             'emitters': list(optimizer.batch_sizes), 'learning_rate': optimizer.learning_rate}
 
 
+def racing(task):
+    """Return the task's racing over the worlds as plain values, or None without it."""
+    spec = task.worlds.racing
+    if spec is None:
+        return None
+    return {'rounds': spec.rounds, 'range': spec.value_range, 'delta': spec.delta,
+            'bounds': list(round_bounds(task.num_world_states, spec.rounds))}
+
+
 def may_end_early(task):
     """Return why a run may simulate less than its budget, one sentence each."""
     reasons = []
+    if task.worlds.racing is not None:
+        reasons.append('racing stops a candidate after a round of its worlds once it cannot '
+                       'be among the mu that CMA-ES selects')
     if task.early_termination is not None:
         reasons.append('early termination (eq. 6) stops a rollout at a check where a goal '
                        'misses by more than its margin')

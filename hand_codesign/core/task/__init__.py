@@ -83,6 +83,8 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
     worlds: {aggregate: worst, fraction: 0.25, resample: generation, final_check: 5}
                                      # optional; default {aggregate: mean, resample: none}, eq. 5
                                      # on one fixed set of worlds. See below.
+      # racing: {rounds: 4, range: 0.1, delta: 0.05}   # optional (cma only): a generation's
+      #   worlds in rounds, a candidate stopped once it cannot be selected. See below.
     optimizer:
       algorithm: cma                 # cma (weighted sum) | mocma (Pareto front) | ipop-cma |
                                      # bipop-cma (CMA-ES with restarts, core.search.restarts; the
@@ -136,6 +138,17 @@ symmetry). Without it every turn counts, as in the paper.
   the seed, core.sim.worlds), so the design cannot fit one set of worlds. The run then reports the
   best, re-evaluated on the fixed worlds, of the best designs of the last `final_check`
   (default 5) generations (core.search.resampling). Not with a hierarchy, two stages or a horizon.
+- `racing` (not in the paper; off unless given; `racing: {}` takes the defaults) evaluates a
+  generation's worlds in `rounds` rounds (default 4) of about equal shares, and stops a candidate
+  once its worlds so far, with a bound on what its remaining worlds can add, rank it below the mu
+  candidates CMA-ES selects (core.search.racing: a Hoeffding race, Heidrich-Meisner and Igel
+  2009, with Serfling's bound for worlds drawn without replacement). The bound takes each
+  world's weighted objectives (m, w_p position + w_r orientation) to lie in a band `range` wide
+  (default 0.1) and holds for all of a generation's candidates and rounds with probability
+  1 - `delta` (default 0.05). A candidate stopped early is told with the mean over the worlds it
+  met and ranked after every candidate that met all of them, and CMA-ES runs without its
+  negative (active) weights, so its update uses only ranks that are known. With
+  `optimizer.algorithm: cma` and `aggregate: mean` only.
 
 A parameter setting is one of:
 
@@ -184,10 +197,11 @@ from hand_codesign.core.task.parts import (ALGORITHMS, ArchiveSpec, AXES, Bounds
                                            HorizonSpec, MORPHOLOGY_PARAMETERS, MorphologySpec,
                                            ObjectSpec, OrientationGoal, PARAMETER_MODES,
                                            ParameterSpec, PhysicsSpec, POLICY_KINDS, PolicySpec,
-                                           PositionGoal, RandomizationSpec, resting_height,
-                                           RESTING_TOLERANCE, SHAPES, STARTS, SymmetrySpec,
-                                           TaskError, TORQUE_MODES, TorquePenaltySpec, WeightsSpec,
-                                           WORLD_AGGREGATES, WORLD_RESAMPLING, WorldsSpec)
+                                           PositionGoal, RacingSpec, RandomizationSpec,
+                                           resting_height, RESTING_TOLERANCE, SHAPES, STARTS,
+                                           SymmetrySpec, TaskError, TORQUE_MODES,
+                                           TorquePenaltySpec, WeightsSpec, WORLD_AGGREGATES,
+                                           WORLD_RESAMPLING, WorldsSpec)
 from hand_codesign.core.task.reader import load_task, parse_design, parse_task
 from hand_codesign.core.task.spec import Task
 
@@ -196,7 +210,8 @@ __all__ = [
     'EarlyTerminationSpec', 'GoalSpec', 'HandSpec', 'HierarchySpec', 'HorizonSpec', 'load_task',
     'MORPHOLOGY_PARAMETERS', 'MorphologySpec', 'ObjectSpec', 'OrientationGoal', 'PARAMETER_MODES',
     'ParameterSpec', 'parse_design', 'parse_task', 'PhysicsSpec', 'POLICY_KINDS', 'PolicySpec',
-    'PositionGoal', 'RandomizationSpec', 'resting_height', 'RESTING_TOLERANCE', 'SHAPES', 'STARTS',
+    'PositionGoal', 'RacingSpec', 'RandomizationSpec', 'resting_height', 'RESTING_TOLERANCE',
+    'SHAPES', 'STARTS',
     'SymmetrySpec', 'Task', 'TaskError', 'TORQUE_MODES', 'TorquePenaltySpec', 'WeightsSpec',
     'WORLD_AGGREGATES', 'WORLD_RESAMPLING', 'WorldsSpec',
 ]

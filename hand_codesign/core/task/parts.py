@@ -253,6 +253,23 @@ class WeightsSpec:
 
 
 @dataclass(frozen=True)
+class RacingSpec:
+    """
+    Racing over the worlds (YAML `worlds.racing`, optional; not in the paper; off by default).
+
+    A generation's candidates meet their worlds in `rounds` rounds of about equal shares; after
+    each round a candidate stops once it can no longer be among the mu that CMA-ES selects,
+    by a bound on what its remaining worlds can add (core.search.racing): each world's
+    weighted objectives (the fitness of one world) are taken to lie in a band `range` wide,
+    and the bound holds for every candidate and round at once with probability 1 - `delta`.
+    """
+
+    rounds: int = 4
+    value_range: float = 0.1  # YAML `range`: width of a world's weighted objectives (m)
+    delta: float = 0.05  # chance that any bound of a generation fails
+
+
+@dataclass(frozen=True)
 class WorldsSpec:
     """
     How a candidate's worlds are scored and drawn (YAML `worlds`, optional; defaults: eq. 5).
@@ -273,6 +290,7 @@ class WorldsSpec:
     fraction: float = 1.0  # of the worlds averaged with aggregate 'worst'; 1 with 'mean'
     resample: str = 'none'
     final_check: int = FINAL_CHECK
+    racing: Optional[RacingSpec] = None  # None: every candidate meets every world (eq. 5)
 
     @property
     def worst_fraction(self):

@@ -8,8 +8,8 @@ objectives' weights and the hierarchy: the sections that set up the search, not 
 
 from hand_codesign.core.task.parts import (ARCHIVE_DESCRIPTOR_NAMES, ArchiveSpec,
                                            EarlyTerminationSpec, ENGINES, HierarchySpec,
-                                           HorizonSpec, PhysicsSpec, WeightsSpec, WORLD_AGGREGATES,
-                                           WORLD_RESAMPLING, WorldsSpec)
+                                           HorizonSpec, PhysicsSpec, RacingSpec, WeightsSpec,
+                                           WORLD_AGGREGATES, WORLD_RESAMPLING, WorldsSpec)
 from hand_codesign.core.task.values import join_key, ValueReader
 
 
@@ -60,7 +60,7 @@ class SettingsReader(ValueReader):
 
     def worlds(self, value, key):
         section = self.mapping(value, key, optional=('aggregate', 'fraction', 'resample',
-                                                     'final_check'))
+                                                     'final_check', 'racing'))
         default = WorldsSpec()
         aggregate = self.choice(section.get('aggregate', default.aggregate),
                                 join_key(key, 'aggregate'), WORLD_AGGREGATES)
@@ -81,10 +81,26 @@ class SettingsReader(ValueReader):
         if resample == 'none' and 'final_check' in section:
             self.fail(join_key(key, 'final_check'), 'no final_check without resample: generation '
                       '(it chooses among resampled generations)', got=False)
+        racing = (self.racing(section['racing'], join_key(key, 'racing'))
+                  if 'racing' in section else None)
         return WorldsSpec(aggregate=aggregate, fraction=fraction, resample=resample,
                           final_check=self.integer(section.get('final_check',
                                                                default.final_check),
-                                                   join_key(key, 'final_check')))
+                                                   join_key(key, 'final_check')),
+                          racing=racing)
+
+    def racing(self, value, key):
+        section = self.mapping(value or {}, key, optional=('rounds', 'range', 'delta'))
+        default = RacingSpec()
+        delta = self.number(section.get('delta', default.delta), join_key(key, 'delta'),
+                            positive=True)
+        if not delta < 1:
+            self.fail(join_key(key, 'delta'), 'a probability in (0, 1)', section['delta'])
+        return RacingSpec(rounds=self.integer(section.get('rounds', default.rounds),
+                                              join_key(key, 'rounds'), minimum=2),
+                          value_range=self.number(section.get('range', default.value_range),
+                                                  join_key(key, 'range'), positive=True),
+                          delta=delta)
 
     def archive(self, value, key):
         section = self.mapping(value, key, optional=('descriptors', 'cells', 'ranges',
