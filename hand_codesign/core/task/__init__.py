@@ -143,12 +143,13 @@ symmetry). Without it every turn counts, as in the paper.
   once its worlds so far, with a bound on what its remaining worlds can add, rank it below the mu
   candidates CMA-ES selects (core.search.racing: a Hoeffding race, Heidrich-Meisner and Igel
   2009, with Serfling's bound for worlds drawn without replacement). The bound takes each
-  world's weighted objectives (m, w_p position + w_r orientation) to lie in a band `range` wide
-  (default 0.1) and holds for all of a generation's candidates and rounds with probability
-  1 - `delta` (default 0.05). A candidate stopped early is told with the mean over the worlds it
-  met and ranked after every candidate that met all of them, and CMA-ES runs without its
-  negative (active) weights, so its update uses only ranks that are known. With
-  `optimizer.algorithm: cma` and `aggregate: mean` only.
+  world's weighted objectives (m, w_p position + w_r orientation), less what the generation's
+  candidates share on that world, to lie in a band `range` wide (default 0.1;
+  bench/bench_racing.py measures the spans of a task's worlds) and holds for all of a
+  generation's candidates and rounds with probability 1 - `delta` (default 0.05). A candidate
+  stopped early is told with the mean over the worlds it met and ranked after every candidate
+  that met all of them, and CMA-ES runs without its negative (active) weights, so its update
+  uses only ranks that are known. With `optimizer.algorithm: cma` and `aggregate: mean` only.
 
 A parameter setting is one of:
 

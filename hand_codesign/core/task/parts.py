@@ -260,8 +260,9 @@ class RacingSpec:
     A generation's candidates meet their worlds in `rounds` rounds of about equal shares; after
     each round a candidate stops once it can no longer be among the mu that CMA-ES selects,
     by a bound on what its remaining worlds can add (core.search.racing): each world's
-    weighted objectives (the fitness of one world) are taken to lie in a band `range` wide,
-    and the bound holds for every candidate and round at once with probability 1 - `delta`.
+    weighted objectives (the fitness of one world), less what the generation's candidates
+    share on that world, are taken to lie in a band `range` wide, and the bound holds for
+    every candidate and round at once with probability 1 - `delta`.
     """
 
     rounds: int = 4
