@@ -6,7 +6,9 @@ import subprocess
 import sys
 
 from hand_codesign.analysis.bag import read_run
-from hand_codesign.analysis.records import open_run, told_worlds
+from hand_codesign.analysis.records import (best_candidate_id, evaluation_rows, open_run,
+                                            recorded_design, stepping_rate, told_objectives,
+                                            told_worlds)
 from hand_codesign.analysis.resume import resume_point
 import numpy as np
 import yaml
@@ -54,5 +56,12 @@ def test_a_raced_run_is_the_same_with_one_and_two_evaluators(tmp_path):
     # what a resume reads back: stopped candidates as such
     record = open_run(tmp_path / 'one')
     assert sorted({count for count, _ in told_worlds(record).values()}) == [2, 4]
+    # the analysis reads the rounds as parts of the told evaluations
+    statuses = set(evaluation_rows(record).status.tolist())
+    assert 'round' in statuses and 'untold' not in statuses and stepping_rate(record) > 0
+    best = best_candidate_id(record)
+    design = recorded_design(record, best)
+    assert design.objectives.tobytes() == told_objectives(record)[best].tobytes()
+    assert design.world_objectives.shape == (4, 2)
     point = resume_point(record, iterations=3)
     assert point.evaluations_told == 16 and not point.known

@@ -23,7 +23,8 @@ experiment (Tasks 5 and 6) to a few hours (Tasks 1 and 4); `smoke` takes minutes
 
 Beyond the paper, `levers-task5` and `levers-task6` compare the paper's algorithms with the
 levers of a more reliable search (restarts, the worst worlds, resampled worlds, quality
-diversity with CMA-MAE and its archive's recommended design) on the same evaluations; a budget
+diversity with CMA-MAE and its archive's recommended design) on the same evaluations, and
+racing over the worlds (`cma-raced`, fewer rollouts: core.search.racing); a budget
 may fix the training worlds of every configuration (`reduced`: issue 12's 40 x 40 on 16
 worlds). They run from the same pinned presets and are not part of `all`. Both also run the
 presets' lever, a preset choice of ours revisited: Task 5 scored along the fingers' axis
@@ -121,6 +122,10 @@ def _budgets(smoke, reduced, paper):
 # worst quarter of its worlds (CVaR), and worlds drawn afresh each generation
 WORST_QUARTER = (('worlds.aggregate', 'worst'), ('worlds.fraction', 0.25))
 RESAMPLED = (('worlds.resample', 'generation'),)
+# racing over the worlds (core.search.racing): 4 rounds, a world's weighted objectives within
+# 2 cm of what a generation's candidates share on it; about the median span of a candidate's
+# worlds so (bench/bench_racing.py: 0.009 on Task 5, 0.014 on Task 6), so the race can stop some
+RACED = (('worlds.racing.rounds', 4), ('worlds.racing.range', 0.02))
 # beyond Table I: five times Task 6's torque bound, the penalty's threshold at 80 % of it
 FIVE_TIMES_TORQUE = (('policy.torque.bounds', (-0.05, 0.05)), ('torque_penalty.threshold', 0.04))
 
@@ -139,7 +144,7 @@ def _lever_configurations(preset):
               ('bipop-cma', 'bipop-cma', ()),
               ('cma-worst25', 'cma', WORST_QUARTER), ('cma-resample', 'cma', RESAMPLED),
               ('cma-worst25-resample', 'cma', WORST_QUARTER + RESAMPLED),
-              ('cma-mae', 'cma-mae', ()))
+              ('cma-mae', 'cma-mae', ()), ('cma-raced', 'cma', RACED))
     return tuple(Configuration(key, preset, algorithm, LEVER_WORLDS, 'torque', options)
                  for key, algorithm, options in levers)
 
