@@ -29,8 +29,9 @@ from typing import Optional, Sequence, Tuple
 
 from hand_codesign.core.outcomes import OutcomeWatch, task_outcomes
 from hand_codesign.core.sim.hand import hand_model
-from hand_codesign.core.sim.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
-                                               task_torque_penalty, weighted_fitness)
+from hand_codesign.core.sim.objectives import (COLLISION_PENALTY, combine_worlds,
+                                               design_torque_penalty, goal_schedule,
+                                               weighted_fitness)
 from hand_codesign.core.sim.policies import make_policy
 from hand_codesign.core.sim.pybullet_sim import Simulator
 from hand_codesign.core.sim.worlds import object_state, world_states
@@ -161,12 +162,7 @@ def evaluate(x, task, worlds: Optional[Sequence] = None, on_world=None,
 def torque_penalty_of(x, task):
     """Return eq. (2)'s torque penalty of normalized genome x on `task` (0 without one)."""
     design = _TaskContext.of(task).genome_spec().decode(np.asarray(x, dtype=float))
-    return _penalty(design, task)
-
-
-def _penalty(design, task):
-    peak = design.controller.values if task.policy.kind == 'torque' else ()
-    return task_torque_penalty(task, peak)
+    return design_torque_penalty(task, design)
 
 
 def evaluate_design(design, task, worlds: Optional[Sequence] = None,
@@ -189,7 +185,7 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     model = hand_model(design.hand, task.hand)
     policy = make_policy(task.policy, design.controller, model.initial_angles,
                          task.time_step)
-    penalty = _penalty(design, task)
+    penalty = design_torque_penalty(task, design)
     simulator.build(task, model)
     kind = task.object_spec.shape
     objects = [(state, simulator.object_shape(state, kind)) for state in every_state]

@@ -45,8 +45,9 @@ def candidate_message(run_id, candidate, genome_names, evaluator_id, attempt, de
         genome_names=list(genome_names), world_states=int(variant.world_states),
         stage=int(variant.stage), held_out_worlds=bool(variant.held_out),
         world_draw=int(variant.world_draw))
-    if candidate.share:  # a racing round's share of the worlds (core.search.racing)
-        message.worlds_from, message.worlds_to = (int(index) for index in candidate.share)
+    share = getattr(candidate, 'share', ())  # a racing round's (core.search.racing)
+    if share:
+        message.worlds_from, message.worlds_to = (int(index) for index in share)
     if design is not None:
         message.design_names = list(design.names)
         message.design_values = list(design.values)

@@ -15,9 +15,10 @@ resumed run rebuilds the same search.
 
 import dataclasses
 
-from hand_codesign.core.evaluate import torque_penalty_of
 from hand_codesign.core.search.racing import Race, RoundAnswer
+from hand_codesign.core.sim.objectives import design_torque_penalty
 from hand_codesign.core.sim.worlds import world_states
+from hand_codesign.core.task.genome import genome_spec
 import numpy as np
 
 
@@ -31,7 +32,9 @@ class RaceRounds:
         selected: mu of the batch's optimizer (CmaEs.selected); spec: task.worlds.racing.
         """
         self.batch = {candidate.candidate_id: candidate for candidate in batch}
-        penalties = {candidate.candidate_id: torque_penalty_of(candidate.x, task)
+        genome = genome_spec(task)  # (not core.evaluate's: it loads the simulator)
+        penalties = {candidate.candidate_id: design_torque_penalty(task,
+                                                                   genome.decode(candidate.x))
                      for candidate in batch}
         self.race = Race(list(self.batch), len(world_states(task)), selected, spec,
                          task.objective_weights, penalties)
