@@ -8,7 +8,8 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=find_packages(exclude=['test', 'test.*']),
-    package_data={'hand_codesign.ros': ['fastdds_start.xml']},
+    package_data={'hand_codesign.ros': ['fastdds_start.xml'],
+                  'hand_codesign.core.sim': ['mujoco_pd.c']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),

@@ -13,6 +13,10 @@ Measures, in one run, per task:
   designs drawn uniformly from the genome space (so both verdicts occur), one world each
   (target: agree in >= 99 %).
 
+PD tasks (task1, task5_pd): also the MuJoCo PD law stepped in C (core.sim.mujoco_native)
+against the same law stepped in Python, on the same designs, and whether the two give the same
+bits (they must).
+
 --bags BAG ...: instead, the speed ratio on the candidates recorded in each run's bag (its
 task as run, e.g. Table I's 64 worlds): --speed-sample of them, spread evenly over the run.
 A ratio on 8 worlds weighs the per-candidate build (a Bullet hand costs milliseconds, a
@@ -20,8 +24,9 @@ MuJoCo compile about 1.5 ms) eight times as much as one on 64. Then the same can
 two processes at once, per engine (wall seconds of the slower): a run's two evaluators share
 the machine's two cores, its caches and memory, and an engine may suffer more from that.
 
-Usage: python bench/bench_engines.py [--designs 200] [--generations 25] [--popsize 16]
-       [--world-states 8] [--speed-sample 12] [--rounds 3] [--collision-pairs 1000]
+Usage: python bench/bench_engines.py [--tasks task5 task6 | task1 task5_pd] [--designs 200]
+       [--generations 25] [--popsize 16] [--world-states 8] [--speed-sample 12] [--rounds 3]
+       [--collision-pairs 1000]
        python bench/bench_engines.py --bags BAG [BAG ...] [--speed-sample 12] [--rounds 3]
 """
 
@@ -34,8 +39,9 @@ import time
 
 from bench_physics import searched_designs, spearman
 from hand_codesign.analysis.records import open_run, recorded_design, run_task_of
-from hand_codesign.core.evaluate import evaluate, shared_simulator
+from hand_codesign.core.evaluate import evaluate, evaluate_design, shared_simulator
 from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.mujoco_sim import MujocoSimulator
 from hand_codesign.core.sim.worlds import object_state, world_states
 from hand_codesign.core.task import load_task
 from hand_codesign.core.task.genome import genome_spec
@@ -61,6 +67,26 @@ def speed_ratio(tasks, genomes, rounds):
                 best[index] = min(best[index], time.process_time() - start)
         seconds += best
     return seconds
+
+
+def pd_law_ratio(task, genomes, rounds):
+    """Return (Python law s, C law s, same bits) of MuJoCo evaluations, best of rounds each."""
+    spec = genome_spec(task)
+    seconds, same = np.zeros(2), True
+    with MujocoSimulator() as python, MujocoSimulator() as native:
+        python.native = False
+        for x in genomes:
+            design, best, results = spec.decode(x), np.full(2, np.inf), []
+            for _ in range(rounds):
+                for index, simulator in enumerate((python, native)):
+                    start = time.process_time()
+                    results.append(evaluate_design(design, task, simulator=simulator))
+                    best[index] = min(best[index], time.process_time() - start)
+            seconds += best
+            same &= all(np.array_equal(result.world_objectives, results[0].world_objectives)
+                        and np.array_equal(result.final_poses, results[0].final_poses)
+                        for result in results)
+    return seconds[0], seconds[1], same
 
 
 def collision_agreement(task, pairs, seed=5):
@@ -96,6 +122,8 @@ def bench_task(name, arguments):
     unstable = sum(result.unstable_worlds > 0 for result in mujoco_results)
     sample = genomes[::max(1, len(genomes) // arguments.speed_sample)][:arguments.speed_sample]
     bullet_seconds, mujoco_seconds = speed_ratio((reference, mujoco), sample, arguments.rounds)
+    law = (pd_law_ratio(mujoco, sample, arguments.rounds) if reference.policy.kind == 'pd'
+           else None)
     agree, pairs, colliding = collision_agreement(reference, arguments.collision_pairs)
     print(f'{name}: {len(genomes)} designs from {arguments.generations} x {arguments.popsize} '
           f'CMA-ES on PyBullet, {arguments.world_states} worlds each '
@@ -104,6 +132,10 @@ def bench_task(name, arguments):
           f'(PyBullet {bullet_seconds / len(sample) * 1e3:.1f} ms, MuJoCo '
           f'{mujoco_seconds / len(sample) * 1e3:.1f} ms per evaluation, {len(sample)} designs, '
           f'best of {arguments.rounds})')
+    if law is not None:
+        print(f'  MuJoCo PD law in C over the law in Python: {law[0] / law[1]:.2f} '
+              f'({law[0] / len(sample) * 1e3:.1f} and {law[1] / len(sample) * 1e3:.1f} ms per '
+              f'evaluation; bit-identical: {"yes" if law[2] else "NO"})')
     print(f'  Spearman rank correlation of the weighted sum between engines: '
           f'{spearman(bullet_fitness, mujoco_fitness):.3f} (designs unstable on MuJoCo: '
           f'{unstable}); median fitness PyBullet {np.median(bullet_fitness):.4f}, '

@@ -13,8 +13,8 @@ from hand_codesign.core.evaluate import evaluate
 from hand_codesign.ros import evaluator_node
 
 
-def lying_evaluate(genome, task, worlds=None, on_world=None):
-    truth = evaluate(genome, task, worlds, on_world)
+def lying_evaluate(genome, task, worlds=None, on_world=None, share=None):
+    truth = evaluate(genome, task, worlds, on_world, share)
     return dataclasses.replace(truth, objectives=truth.objectives - 1e-3,
                                fitness=truth.fitness - 1e-3)
 

@@ -160,7 +160,8 @@ def test_the_world_scoring_is_shown(capsys, tmp_path):
     assert 'of the best designs of the last 3 generations' in text
     summary = checked(capsys, str(path), '--iterations', '4', '--popsize', '6')
     assert summary['world_scoring'] == {'aggregate': 'worst', 'fraction': 0.25,
-                                        'resample': 'generation', 'final_check': 3}
+                                        'resample': 'generation', 'final_check': 3,
+                                        'racing': None}
     # 4 x 6 evaluations, then the final check of 3 designs on the 8 worlds
     assert summary['budget']['evaluations'] == 4 * 6 + 3
     assert summary['budget']['rollouts'] == (4 * 6 + 3) * 8
@@ -228,3 +229,18 @@ def test_json_floats_are_exact(capsys):
     quaternion = summary['worlds'][7]['start']['orientation']
     assert quaternion == list(state.orientation)
     assert np.isclose(np.linalg.norm(quaternion), 1.0)
+
+
+def test_racing_over_the_worlds_is_shown(tmp_path, capsys):
+    document = yaml.safe_load((TASKS / 'task5.yaml').read_text())
+    document['worlds'] = {'racing': {'rounds': 3, 'range': 0.05}}
+    path = tmp_path / 'raced.yaml'
+    path.write_text(yaml.safe_dump(document))
+    assert main(['check', str(path), '--world-states', '64']) == 0
+    text = ' '.join(capsys.readouterr().out.split())
+    assert 'in 3 rounds (worlds [0, 21, 42, 64])' in text
+    summary = checked(capsys, str(path), '--world-states', '64')
+    assert summary['world_scoring']['racing'] == {'rounds': 3, 'range': 0.05, 'delta': 0.05,
+                                                  'bounds': [0, 21, 42, 64]}
+    assert any(reason.startswith('racing stops a candidate')
+               for reason in summary['budget']['may_end_early'])

@@ -82,7 +82,8 @@ def test_the_signed_bytes_are_those_the_msg_comment_spells():
         # the design in physical terms, all empty here: names, values, URDF, controller
         + struct.pack('<II', 0, 0) + string('') * 3 + struct.pack('<Q', 0)
         + struct.pack('<IIII', 0, 0, 0, 0)
-        + struct.pack('<QQQ', 0, 0, 0))  # stage, held_out_worlds, world_draw
+        + struct.pack('<QQQ', 0, 0, 0)  # stage, held_out_worlds, world_draw
+        + struct.pack('<QQ', 0, 0))  # worlds_from, worlds_to: all the worlds
     key = hmac.new(SECRET, b'evaluator\x00' + 'é'.encode(), hashlib.sha256).digest()
     expected = hmac.new(key, candidate_bytes + hashlib.sha256(run_bytes).digest(),
                         hashlib.sha256).digest()

@@ -9,8 +9,10 @@ work on the RunRecord it returns:
   `core.run.runs.run_task`), or the version of it a candidate's Variant says, if asked;
 - `evaluation_rows(record)`: every Evaluation joined with its Candidate (genome, structure),
   with a status of 'ok', 'rejected', 'duplicate' (a later answer for an already evaluated
-  candidate, which the optimizer ignored, or an audit's) or 'untold' (an answer that differs
-  from what the summaries say was told: a forgery the optimizer ignored, or a liar's);
+  candidate, which the optimizer ignored, or an audit's), 'untold' (an answer that differs
+  from what the summaries say was told: a forgery the optimizer ignored, or a liar's) or
+  'round' (the first answer to a racing round's share of a candidate's worlds,
+  core.search.racing: the summaries hold what the rounds added up to);
 - `recorded_design(record, candidate_id)`: one recorded candidate with its recorded result;
 - `best_candidate_id(record)` and `ranked_candidate_id(record, generation, rank)`: which design
   a verb works on by default and on request;
@@ -30,9 +32,12 @@ from hand_codesign.bag.reader import read_run
 from hand_codesign.core.contract import STATUS_NAMES
 from hand_codesign.core.contract import STATUS_OK
 from hand_codesign.core.outcomes import Answer
+from hand_codesign.core.outcomes import objectives_of
 from hand_codesign.core.search.optimizers import OptimizerError
 from hand_codesign.core.search.optimizers import replay
+from hand_codesign.core.search.racing import RacedAnswer
 from hand_codesign.core.search.search import Search
+from hand_codesign.core.sim.objectives import weighted_fitness
 from hand_codesign.core.task import TaskError
 from hand_codesign.core.task.parts import QD_ALGORITHMS
 from hand_codesign.core.task.parts import RESTART_ALGORITHMS
@@ -218,6 +223,33 @@ def _told_statuses(statuses, evaluations, objectives, told):
     return statuses
 
 
+def round_shares(record):
+    """Return {(candidate id, attempt): (first, end)} of the racing rounds a run sent."""
+    candidates = record.candidates
+    if not len(candidates) or 'worlds_to' not in candidates:
+        return {}
+    return {(int(candidate_id), int(attempt)): (int(first), int(end))
+            for candidate_id, attempt, first, end in zip(
+                candidates['candidate_id'], candidates['attempt'], candidates['worlds_from'],
+                candidates['worlds_to']) if end == end and int(end) > 0}
+
+
+def _round_statuses(statuses, evaluations, shares):
+    """Return statuses with each racing round's first answer 'round', later ones 'duplicate'."""
+    if not shares:
+        return statuses
+    statuses, seen = statuses.copy(), set()
+    for row, (candidate_id, attempt) in enumerate(zip(evaluations['candidate_id'],
+                                                      evaluations['attempt'])):
+        share = shares.get((int(candidate_id), int(attempt)))
+        if share is None or statuses[row] == 'rejected':
+            continue
+        key = (int(candidate_id), share)
+        statuses[row] = 'duplicate' if key in seen else 'round'
+        seen.add(key)
+    return statuses
+
+
 def _genes(candidates, rows):
     """Return (gene names, (len(rows), genes) physical-free genome matrix) of candidate rows."""
     if not len(candidates) or 'genome' not in candidates:
@@ -260,8 +292,9 @@ def evaluation_rows(record):
         generation=np.asarray(evaluations['generation'], dtype=np.int64),
         candidate_id=np.asarray(evaluations['candidate_id'], dtype=np.uint64),
         evaluator_id=np.asarray(evaluations['evaluator_id'], dtype=object),
-        status=_told_statuses(_statuses(evaluations), evaluations, objectives,
-                              told_objectives(record)),
+        status=_round_statuses(_told_statuses(_statuses(evaluations), evaluations, objectives,
+                                              told_objectives(record)),
+                               evaluations, round_shares(record)),
         reason=np.asarray(evaluations['reason'], dtype=object),
         objectives=objectives,
         fitness=np.asarray(evaluations['fitness'], dtype=float),
@@ -281,11 +314,12 @@ def stepping_rate(record):
     Return the physics steps per wall second of a run, from its bag.
 
     The steps of the accepted evaluations (simulated_time over the time step, once per
-    candidate: audits and late duplicates are cost, not progress), over the wall time from the
-    first candidate recorded to the last evaluation.
+    candidate, or per racing round of it: audits and late duplicates are cost, not progress),
+    over the wall time from the first candidate recorded to the last evaluation.
     """
     rows = evaluation_rows(record)
-    steps = np.sum(rows.simulated_time[rows.ok]) / run_task_of(record).time_step
+    used = np.isin(rows.status, ('ok', 'round'))
+    steps = np.sum(rows.simulated_time[used]) / run_task_of(record).time_step
     return steps / ((np.max(rows.log_time) - np.min(record.candidates['log_time'])) * 1e-9)
 
 
@@ -339,7 +373,10 @@ def recorded_design(record, candidate_id):
             same = [row for row in matches if np.asarray(
                 evaluations['objectives'][row], dtype=float).tobytes() == told.tobytes()]
             matches = same or matches
-        if len(matches):
+        raced = _raced_result(record, candidate_id, matches, told)
+        if raced is not None:
+            objectives, fitness, world_objectives, evaluator_id = raced
+        elif len(matches):
             evaluation = evaluations.row(int(matches[0]))
             objectives = np.asarray(evaluation['objectives'], dtype=float)
             fitness = float(evaluation['fitness'])
@@ -358,6 +395,30 @@ def recorded_design(record, candidate_id):
         genome_names=tuple(candidate['genome_names']), objective_names=names,
         objectives=objectives, fitness=fitness, world_objectives=world_objectives,
         evaluator_id=evaluator_id)
+
+
+def _raced_result(record, candidate_id, rows, told):
+    """
+    Return (objectives, fitness, world objectives, evaluator) of a raced candidate, or None.
+
+    Its Evaluations answer racing rounds (core.search.racing): its result is what the
+    summaries say was told, over the worlds of its rounds' first answers, in world order.
+    """
+    shares = round_shares(record)
+    evaluations = record.evaluations
+    parts = {}
+    for row in rows:
+        share = shares.get((int(candidate_id), int(evaluations['attempt'][row])))
+        if share is not None:
+            parts.setdefault(share, row)
+    if told is None or not parts:
+        return None
+    worlds = [np.asarray(evaluations['world_objectives'][parts[share]], dtype=float)
+              for share in sorted(parts)]
+    fitness = weighted_fitness(told, run_task_of(record).objective_weights)
+    evaluators = sorted({str(evaluations['evaluator_id'][row]) for row in parts.values()})
+    return (told.copy(), fitness, np.concatenate(worlds).reshape(-1, len(told)),
+            ', '.join(evaluators))
 
 
 def design_task(record, design):
@@ -394,6 +455,40 @@ def told_objectives(record):
     return told
 
 
+def told_worlds(record):
+    """
+    Return {candidate id: (worlds met, the batch's worlds)} of a raced run's summaries.
+
+    Racing (core.search.racing) records per told candidate the worlds it met (told_worlds);
+    at least mu candidates of a batch meet all of them, so the most any met is the batch's.
+    Empty for a run without racing (and bags older than the field).
+    """
+    summaries = record.generation_summaries
+    met = {}
+    if not len(summaries) or 'told_worlds' not in summaries:
+        return met
+    for index in range(len(summaries)):
+        worlds = np.asarray(summaries['told_worlds'][index]).ravel()
+        ids = np.asarray(summaries['told_ids'][index]).ravel()
+        if worlds.dtype.kind == 'f':   # the table pads the empty lists of some rows with NaN
+            worlds, ids = worlds[np.isfinite(worlds)], ids[np.isfinite(ids)]
+        if not len(worlds) or len(worlds) != len(ids):
+            continue
+        most = int(worlds.max())
+        for candidate_id, count in zip(ids.astype(np.uint64).tolist(), worlds.tolist()):
+            met.setdefault(int(candidate_id), (int(count), most))
+    return met
+
+
+def with_worlds(recorded, worlds):
+    """Return recorded with a RacedAnswer for each candidate a race stopped early."""
+    raced = dict(recorded)
+    for candidate_id, (count, most) in worlds.items():
+        if candidate_id in raced and count < most:
+            raced[candidate_id] = RacedAnswer(objectives_of(raced[candidate_id]), count, False)
+    return raced
+
+
 def recorded_evaluations(record):
     """
     Return {candidate id: objectives} of every candidate the bag holds a result for.
@@ -410,12 +505,14 @@ def recorded_evaluations(record):
         objectives = rows.objectives[index]
         if candidate_id not in recorded and np.all(np.isfinite(objectives)):
             recorded[candidate_id] = objectives.copy()
-    return with_outcomes(recorded, told_outcomes(record, rows))
+    return with_worlds(with_outcomes(recorded, told_outcomes(record, rows)),
+                       told_worlds(record))
 
 
 def told_answers(record):
-    """Return {candidate id: objectives or Answer} as told to the optimizer (summaries)."""
-    return with_outcomes(told_objectives(record), told_outcomes(record))
+    """Return {candidate id: objectives, Answer or RacedAnswer} as told to the optimizer."""
+    return with_worlds(with_outcomes(told_objectives(record), told_outcomes(record)),
+                       told_worlds(record))
 
 
 def told_outcomes(record, rows=None):

@@ -90,6 +90,17 @@ def default_report_dir(bag_path):
     return records.beside_bag(bag_path, '_report')
 
 
+def evaluation_counts(status):
+    """Return the line counting a run's evaluations by status (records.evaluation_rows)."""
+    count = {name: int((status == name).sum()) for name in
+             ('ok', 'round', 'rejected', 'duplicate', 'untold')}
+    return (f'{count["ok"] + count["round"]} ok'
+            + (f' ({count["round"]} of them racing rounds)' if count['round'] else '')
+            + f', {count["rejected"]} rejected, {count["duplicate"]} duplicate'
+            + (f', {count["untold"]} untold (answers the summaries contradict)'
+               if count['untold'] else ''))
+
+
 class Report:
     """The report of one RunRecord: tables, figures and text."""
 
@@ -148,7 +159,8 @@ class Report:
     def facts(self):
         """Return [(label, text)] describing the run."""
         info, rows, record = self.info, self.rows, self.record
-        ok = int(rows.ok.sum())
+        used = np.isin(rows.status, ('ok', 'round'))  # a racing round's answers are used too
+        ok = int(used.sum())
         facts = [('bag', record.path), ('run', record.run_id or '(unknown)')]
         if info is not None:
             facts += [('task', info.task_name), ('seed', str(info.seed)),
@@ -178,20 +190,16 @@ class Report:
             facts.append(('task', '(unknown: the bag holds no RunInfo)'))
         wall = self.wall_time
         facts += [
-            ('evaluations', f'{ok} ok, {int((rows.status == "rejected").sum())} rejected, '
-                            f'{int((rows.status == "duplicate").sum())} duplicate'
-                            + (f', {int((rows.status == "untold").sum())} untold (answers '
-                               'the summaries contradict)' if (rows.status == 'untold').any()
-                               else '')),
+            ('evaluations', evaluation_counts(rows.status)),
             ('generations', f'{len(self.generations)} (from {self.generations.source})'),
             ('wall time', f'{wall:.1f} s'),
             ('evaluations per second', f'{ok / wall:.2f}' if wall > 0 else 'n/a'),
         ]
-        simulated = float(np.sum(rows.simulated_time[rows.ok]))
+        simulated = float(np.sum(rows.simulated_time[used]))
         if wall > 0 and simulated > 0:
             facts.append(('simulated time', f'{simulated:.1f} s ({simulated / wall:.1f} '
                                             'simulated s per wall s)'))
-        evaluators = sorted(set(rows.evaluator_id[rows.ok].tolist()))
+        evaluators = sorted(set(rows.evaluator_id[used].tolist()))
         facts.append(('evaluators', str(len(evaluators)) + (
             f': {", ".join(evaluators[:8])}' + (' ...' if len(evaluators) > 8 else '')
             if evaluators else '')))

@@ -228,6 +228,12 @@ def scoring_text(summary):
                  f'on), of the best designs of the last {scoring["final_check"]} generations')
     else:
         which = 'every candidate meets the training worlds above'
+    race = scoring.get('racing')
+    if race is not None:
+        which += (f', in {len(race["bounds"]) - 1} rounds (worlds {race["bounds"]}); after each '
+                  'a candidate stops once it cannot be among the mu CMA-ES selects (racing, '
+                  f'a world\'s weighted objectives within {race["range"]:g}, delta '
+                  f'{race["delta"]:g})')
     return wrap(f'scoring: {how}; {which}')
 
 

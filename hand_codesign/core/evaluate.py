@@ -29,8 +29,9 @@ from typing import Optional, Sequence, Tuple
 
 from hand_codesign.core.outcomes import OutcomeWatch, task_outcomes
 from hand_codesign.core.sim.hand import hand_model
-from hand_codesign.core.sim.objectives import (COLLISION_PENALTY, combine_worlds, goal_schedule,
-                                               task_torque_penalty, weighted_fitness)
+from hand_codesign.core.sim.objectives import (COLLISION_PENALTY, combine_worlds,
+                                               design_torque_penalty, goal_schedule,
+                                               weighted_fitness)
 from hand_codesign.core.sim.policies import make_policy
 from hand_codesign.core.sim.pybullet_sim import Simulator
 from hand_codesign.core.sim.worlds import object_state, world_states
@@ -128,7 +129,8 @@ class _TaskContext:
         return entry
 
 
-def evaluate(x, task, worlds: Optional[Sequence] = None, on_world=None) -> 'Evaluation':
+def evaluate(x, task, worlds: Optional[Sequence] = None, on_world=None,
+             share: Optional[Tuple[int, int]] = None) -> 'Evaluation':
     """
     Return the Evaluation of normalized genome x on `task` (default worlds: the task's).
 
@@ -138,43 +140,55 @@ def evaluate(x, task, worlds: Optional[Sequence] = None, on_world=None) -> 'Eval
     evaluate on, default world_states(task), the task's num_world_states training worlds.
     `on_world(index, simulator)`, if given, is called before each world's rollout: a caller
     that must stay responsive (an evaluator's heartbeats) does its chores there.
+    share: (first, end), a racing round's share of those worlds (core.search.racing): only
+    worlds first..end-1 are simulated and scored, while the starts of all of them are checked
+    for collisions (a design that starts in collision in any of them scores COLLISION_PENALTY
+    in every round); None: all of them.
 
     The Evaluation holds `objectives` (shape (objectives,), in task.objective_names' order:
     position errors in m, orientation errors in rad, eq. 5 over the worlds with the torque
     penalty), `fitness` (their sum weighted by task.objective_weights), `world_objectives`
-    (shape (worlds, objectives)), `initial_errors` and `final_errors` (shape (worlds, 2): m,
-    rad), `final_poses` (shape (worlds, 7): m, then a quaternion x, y, z, w), the simulated
-    time (s), the count of unstable worlds and whether the design starts in collision (every
-    objective then COLLISION_PENALTY). Deterministic: the same x, task and worlds give the same
-    bits in any process. Raises ValueError for a genome of the wrong size.
+    (shape (worlds, objectives), the share's worlds), `initial_errors` and `final_errors`
+    (shape (worlds, 2): m, rad), `final_poses` (shape (worlds, 7): m, then a quaternion x, y,
+    z, w), the simulated time (s), the count of unstable worlds and whether the design starts
+    in collision (every objective then COLLISION_PENALTY). Deterministic: the same x, task,
+    worlds and share give the same bits in any process. Raises ValueError for a genome of the
+    wrong size.
     """
     design = _TaskContext.of(task).genome_spec().decode(np.asarray(x, dtype=float))
-    return evaluate_design(design, task, worlds, on_world=on_world)
+    return evaluate_design(design, task, worlds, on_world=on_world, share=share)
+
+
+def torque_penalty_of(x, task):
+    """Return eq. (2)'s torque penalty of normalized genome x on `task` (0 without one)."""
+    design = _TaskContext.of(task).genome_spec().decode(np.asarray(x, dtype=float))
+    return design_torque_penalty(task, design)
 
 
 def evaluate_design(design, task, worlds: Optional[Sequence] = None,
                     simulator: Optional[Simulator] = None, on_frame=None, frame_every=1,
-                    on_world=None):
+                    on_world=None, share=None):
     """
-    Return the Evaluation of a Design on `task`.
+    Return the Evaluation of a Design on `task` (`worlds` and `share` as for `evaluate`).
 
     `simulator` defaults to the process-wide one of the task's engine (physics.engine). For
     replay: `on_world(index, simulator)` is called before each world's rollout and
     `on_frame(step, simulator)` at its frames (see Simulator.rollout).
     """
     context = _TaskContext.of(task)
-    states, initial = context.objects(worlds)
+    every_state, every_initial = context.objects(worlds)
+    first, end = (0, len(every_state)) if share is None else share
+    states, initial = every_state[first:end], every_initial[first:end]
     if simulator is None:
         simulator = shared_simulator(task.physics.engine)
     schedule = context.schedule
     model = hand_model(design.hand, task.hand)
     policy = make_policy(task.policy, design.controller, model.initial_angles,
                          task.time_step)
-    peak = design.controller.values if task.policy.kind == 'torque' else ()
-    penalty = task_torque_penalty(task, peak)
+    penalty = design_torque_penalty(task, design)
     simulator.build(task, model)
-    objects = [(state, simulator.object_shape(state, task.object_spec.shape))
-               for state in states]
+    kind = task.object_spec.shape
+    objects = [(state, simulator.object_shape(state, kind)) for state in every_state]
     num_objectives = schedule.num_objectives
     watch = OutcomeWatch(context.outcome_names, len(states))
     if simulator.start_collisions(objects):
@@ -187,7 +201,7 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     final = np.empty((len(states), 2))
     final_poses = np.empty((len(states), 7))
     unstable_worlds, steps = 0, 0
-    for index, (state, shape) in enumerate(objects):
+    for index, (state, shape) in enumerate(objects[first:end]):
         if on_world is not None:
             on_world(index, simulator)
         result = simulator.rollout(state, shape, policy, schedule, on_frame, frame_every,

@@ -45,6 +45,9 @@ def candidate_message(run_id, candidate, genome_names, evaluator_id, attempt, de
         genome_names=list(genome_names), world_states=int(variant.world_states),
         stage=int(variant.stage), held_out_worlds=bool(variant.held_out),
         world_draw=int(variant.world_draw))
+    share = getattr(candidate, 'share', ())  # a racing round's (core.search.racing)
+    if share:
+        message.worlds_from, message.worlds_to = (int(index) for index in share)
     if design is not None:
         message.design_names = list(design.names)
         message.design_values = list(design.values)
@@ -102,7 +105,8 @@ def summary_message(run_id, summary):
         audit_evaluations=int(summary.get('audit_evaluations', 0)),
         audited_ids=[int(i) for i in summary.get('audited_ids', ())],
         quarantined=list(summary.get('quarantined', ())),
-        reevaluations=int(summary.get('reevaluations', 0)))
+        reevaluations=int(summary.get('reevaluations', 0)),
+        told_worlds=[int(worlds) for worlds in summary.get('told_worlds', ())])
 
 
 def shape_marker(shape, number, stamp, frame_id=WORLD_FRAME):

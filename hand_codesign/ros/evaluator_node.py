@@ -112,7 +112,7 @@ class EvaluatorNode(Node):
             job = self.inbox.job(message)
             answer = evaluation_message(message, self.evaluator_id,
                                         evaluate(job.genome, job.task, job.worlds,
-                                                 on_world=self.poll))
+                                                 on_world=self.poll, share=job.share))
         except CandidateRejected as reason:
             answer = rejection_message(message, self.evaluator_id, str(reason))
         except ExternalShutdownException:  # heard while polling between worlds

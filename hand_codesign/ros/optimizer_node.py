@@ -120,7 +120,7 @@ class OptimizerNode(Node):
             self.run.rejected(*key, message.reason)
         else:
             self.run.evaluated(*key, message.objectives, message.wall_time,
-                               message.outcome_names, message.outcomes)
+                               message.outcome_names, message.outcomes, evaluation=message)
 
     def send_candidate(self, candidate, evaluator_id, attempt, genome_names, design):
         self.publish(topics.CANDIDATES, self.signer.candidate(candidate_message(

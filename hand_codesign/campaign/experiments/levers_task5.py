@@ -2,8 +2,9 @@
 Beyond the paper, on Task 5: the levers of a more reliable search, on the same evaluations.
 
 The paper's algorithms against restarts (IPOP-, BIPOP-CMA-ES), the worst quarter of the
-worlds (CVaR), worlds resampled each generation and quality diversity (CMA-MAE and its
-archive's recommended design); the reduced budget fixes every configuration's training worlds
+worlds (CVaR), worlds resampled each generation, quality diversity (CMA-MAE and its
+archive's recommended design) and racing over the worlds (`cma-raced`, fewer rollouts:
+core.search.racing); the reduced budget fixes every configuration's training worlds
 (40 x 40 on 16 worlds). Also the presets' lever, a preset choice of ours revisited: the
 position scored along the fingers' axis alone (`task5_along_x.yaml`; the tables give the
 shares within 5 mm along x and along y beside the share in the plane), on which CMA-MAE also

@@ -31,7 +31,9 @@ whether the answer is right. Rules (the RunController applies them to each answe
 
 An answer is an objective vector, or a core.outcomes.Answer when the run's archive spans
 outcome descriptors: two answers agree when objectives and outcomes agree bit for bit, and the
-value taken is the first agreeing evaluator's whole answer.
+value taken is the first agreeing evaluator's whole answer. A racing round's answer
+(core.search.racing.RoundAnswer) agrees when its objectives, its worlds' objectives and its
+start check agree; a batch's rounds are audited each as a batch of its own.
 
 What this buys against an evaluator that lies rarely, after its probation: each lie is
 caught with probability `fraction`, so one that lies k times goes unnoticed with probability
@@ -40,7 +42,6 @@ caught with probability `fraction`, so one that lies k times goes unnoticed with
 
 import collections
 
-from hand_codesign.core.outcomes import Answer
 from hand_codesign.core.run.supervision import serves_role
 import numpy as np
 
@@ -106,7 +107,7 @@ class Audits:
 
         `answer`: the objectives, or a core.outcomes.Answer (objectives and outcomes).
         """
-        if not isinstance(answer, Answer):
+        if not hasattr(answer, 'fingerprint'):  # an Answer or a racing round's keeps its kind
             answer = np.asarray(answer, dtype=float)
         answers = self._answers.setdefault(candidate_id, [])
         answers.append((evaluator_id, answer))
@@ -193,4 +194,4 @@ class Audits:
 
 def _fingerprint(answer):
     """Return the bytes two agreeing answers share (objectives, and outcomes if any)."""
-    return answer.fingerprint() if isinstance(answer, Answer) else answer.tobytes()
+    return answer.fingerprint() if hasattr(answer, 'fingerprint') else answer.tobytes()

@@ -29,7 +29,11 @@ the
   mismatch to a third, and a liar is quarantined (its untold answers are evaluated again).
   Audits are cost, not progress: neither the evaluations told nor the rate count them.
 - the progress line's rate and time left count only the evaluations this process sent: a
-  resumed run's replayed record took no time here.
+  resumed run's replayed record took no time here;
+- with racing (`worlds: {racing: ...}`) a generation goes out in rounds (core.run.rounds): each
+  round waits for all its answers, then the race stops the candidates that can no longer be
+  selected; the batch is told when the race is done. A hierarchy's or resampling's checks are
+  not raced.
 """
 
 import collections
@@ -43,6 +47,7 @@ from hand_codesign.core.outcomes import objectives_of
 from hand_codesign.core.run.audits import Audits
 from hand_codesign.core.run.audits import DEFAULT_FRACTION
 from hand_codesign.core.run.dispatch import Dispatcher
+from hand_codesign.core.run.rounds import RaceRounds
 from hand_codesign.core.run.runs import engine_version, library_versions
 from hand_codesign.core.run.summary import generation_summary
 from hand_codesign.core.run.summary import progress_line
@@ -92,6 +97,7 @@ class RunController:
         self.adaptive_timeout = evaluation_timeout <= 0
         self.wall_times = collections.deque(maxlen=ADAPTIVE_WINDOW)
         self.batch = None
+        self.rounds = None  # RaceRounds of a raced batch in flight (core.run.rounds)
         self.genome_names = ()
         self.physical = {}  # candidate id -> PhysicalDesign of the batch in flight
         self.results = {}
@@ -129,20 +135,25 @@ class RunController:
             self.advance()
 
     def evaluated(self, run_id, candidate_id, evaluator_id, objectives, wall_time,
-                  outcome_names=(), outcomes=()):
+                  outcome_names=(), outcomes=(), evaluation=None):
         """
         Take an evaluation: the first answer, or an audit's, per core.run.audits' rules.
 
         With outcome descriptors (core.outcomes, a quality-diversity archive's) the answer
-        told is a core.outcomes.Answer, else the objectives alone.
+        told is a core.outcomes.Answer, else the objectives alone. `evaluation`: the whole
+        Evaluation (any object with its fields), which a raced batch's round reads (its
+        attempt, world_objectives and collision; core.run.rounds).
         """
+        raced = self.rounds is not None
         if (not self.ours(run_id) or evaluator_id in self.audits.quarantined
+                or (raced and self.rounds.stale(candidate_id, evaluation.attempt))
                 or self.audits.answered(candidate_id, evaluator_id)
                 or not self.dispatcher.complete(candidate_id)):
             return
         self.wall_times.append(wall_time)
         others = set(self.dispatcher.live_evaluators(self.clock())) - {evaluator_id}
-        answer = (Answer.of(objectives, outcome_names, outcomes) if len(outcome_names)
+        answer = (RaceRounds.answer(objectives, evaluation) if raced
+                  else Answer.of(objectives, outcome_names, outcomes) if len(outcome_names)
                   else objectives)
         verdict = self.audits.take(candidate_id, evaluator_id, answer, bool(others))
         if verdict.value is not None:
@@ -173,7 +184,8 @@ class RunController:
                                 'it; its answer is taken unaudited', 'warning')
 
     def _send_again(self, candidate_id, exclude):
-        candidate = next(c for c in self.batch if c.candidate_id == candidate_id)
+        candidate = (self.rounds.unit(candidate_id) if self.rounds is not None
+                     else next(c for c in self.batch if c.candidate_id == candidate_id))
         self.dispatcher.add_again(candidate, self.attempts.get(candidate_id, 0), exclude)
 
     def forged(self, run_id, evaluator_id):
@@ -220,6 +232,8 @@ class RunController:
             self._take_unauditable()
             if self.dispatcher.unfinished or self.audits.holding:
                 return
+            if self.rounds is not None and not self._race_done():
+                continue  # the next round was queued: send it
             self._tell_batch()
 
     def _start_batch(self):
@@ -231,8 +245,29 @@ class RunController:
         known = self.resumed.known if self.resumed is not None else {}
         self.results = {candidate.candidate_id: known[candidate.candidate_id]
                         for candidate in self.batch if candidate.candidate_id in known}
+        racing = self.task.worlds.racing
+        if racing is not None and not self.search.checking:
+            self.rounds = RaceRounds(self.batch, self.search.batch_task,
+                                     self.search.optimizer.selected, racing)
+            self._start_round()
+            return
         self.dispatcher.add([candidate for candidate in self.batch
                              if candidate.candidate_id not in self.results])
+
+    def _start_round(self):
+        """Queue the race's current round (core.run.rounds), its attempts continuing."""
+        units = self.rounds.units(self.attempts)
+        self.results = {}
+        self.audits.start_batch()
+        self.dispatcher.add(units, self.rounds.first_attempts)
+
+    def _race_done(self):
+        """Give the race the round's answers; queue the next round, or return True when done."""
+        if not self.rounds.finish_round(self.results, self.audits.audited):
+            self._start_round()
+            return False
+        self.results = self.rounds.answers()
+        return True
 
     def _physical(self, candidate):
         """Return a candidate's design in SI units, made once per batch (re-sends reuse it)."""
@@ -253,6 +288,7 @@ class RunController:
                                for candidate_id in told_ids])
         generation, variant = self.batch[0].generation, self.batch[0].variant
         horizon, stage = variant.horizon, variant.stage
+        rounds, self.rounds = self.rounds, None
         self.batch = None
         elapsed = self.clock() - self.started
         result = self.search.summary_result(optimizer)
@@ -260,7 +296,10 @@ class RunController:
             generation, structure, self.task.objective_names, told_ids, objectives,
             result, self.told, elapsed, checking, horizon)
         summary['best_design'] = self.best_design(structure, result.x)
-        summary.update(self.trust_counts(), audited_ids=sorted(self.audits.audited))
+        audited = self.audits.audited if rounds is None else rounds.audited
+        summary.update(self.trust_counts(), audited_ids=sorted(audited))
+        summary['told_worlds'] = ([] if rounds is None else
+                                  [self.results[candidate_id].worlds for candidate_id in told_ids])
         summary['stage'] = stage  # for the progress line; the candidates carry it
         summary.update(restart_facts(optimizer, generation))
         self.outbox.send_summary(summary)
@@ -311,7 +350,7 @@ class RunController:
             structure=structure, best_id=result.candidate_id,
             best_objectives=result.objectives, best_fitness=result.fitness,
             best_x=result.x, best_design=self.best_design(structure, result.x),
-            audited_ids=[], **self.trust_counts()))
+            audited_ids=[], told_worlds=[], **self.trust_counts()))
         self.outbox.log(f'run {self.run_id} finished ({stop_reason})')
         self.outbox.finish(self._result(result, structure, stop_reason))
 

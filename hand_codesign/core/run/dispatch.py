@@ -54,6 +54,7 @@ class Dispatcher:
         self.max_attempts = max_attempts
         self.evaluators = {}
         self._pending = {}
+        self._first_attempts = {}  # candidate id -> the attempt its dispatch budget counts from
         self._queue = deque()
         self.quarantined = set()
 
@@ -68,10 +69,21 @@ class Dispatcher:
             state.capacity = max(1, capacity)
             state.last_heard = now
 
-    def add(self, candidates):
-        """Queue candidates (objects with a `candidate_id`) for evaluation."""
+    def add(self, candidates, first_attempts=None):
+        """
+        Queue candidates (objects with a `candidate_id`) for evaluation.
+
+        first_attempts: candidate id -> the attempt number its dispatches start from (a
+        racing round's further attempts, core.run.rounds); `max_attempts` counts from there.
+        """
+        first_attempts = first_attempts or {}
         for candidate in candidates:
-            self._pending[candidate.candidate_id] = PendingCandidate(candidate)
+            first = first_attempts.get(candidate.candidate_id, 0)
+            if first:
+                self._first_attempts[candidate.candidate_id] = first
+            else:
+                self._first_attempts.pop(candidate.candidate_id, None)
+            self._pending[candidate.candidate_id] = PendingCandidate(candidate, first)
             self._queue.append(candidate.candidate_id)
 
     def add_again(self, candidate, attempts, exclude=()):
@@ -127,7 +139,8 @@ class Dispatcher:
             if evaluator_id is None:
                 break
             self._queue.popleft()
-            if pending.attempts >= self.max_attempts:
+            first = self._first_attempts.get(candidate_id, 0)
+            if pending.attempts - first >= self.max_attempts:
                 raise DispatchError(
                     f'candidate {candidate_id} was dispatched {pending.attempts} times without '
                     f'an evaluation; rejections: {"; ".join(pending.reasons) or "none"}')
@@ -157,7 +170,8 @@ class Dispatcher:
 
     def _least_loaded(self, pending, live):
         # the last candidates of a batch go only to evaluators with nothing to do
-        last = pending.attempts == 0 and 1 < len(live) and len(self._queue) <= len(live)
+        first = self._first_attempts.get(pending.candidate.candidate_id, 0)
+        last = pending.attempts == first and 1 < len(live) and len(self._queue) <= len(live)
         candidates = [
             (len(state.assigned) / state.capacity, evaluator_id)
             for evaluator_id, state in self.evaluators.items()

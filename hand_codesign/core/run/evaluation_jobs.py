@@ -19,10 +19,11 @@ hold (a candidate's covers its run's RunInfo, so it waits for that) and counts t
 
 import dataclasses
 import time
-from typing import Optional, Sequence
+from typing import Optional, Sequence, Tuple
 
 from hand_codesign.core.run.runs import engine_version, run_task
 from hand_codesign.core.run.signing import run_digest
+from hand_codesign.core.sim.worlds import world_states
 from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.core.task.variant import Variant
 import numpy as np
@@ -41,6 +42,7 @@ class EvaluationJob:
     task: object
     genome: np.ndarray
     worlds: Optional[Sequence] = None  # None: every world state of the task
+    share: Optional[Tuple[int, int]] = None  # a racing round's (first, end) of them; None: all
 
 
 def job_key(candidate):
@@ -101,7 +103,25 @@ def evaluation_job(run, candidate, built=None):
             f'{task.name} needs {expected}')
     if not np.all(np.isfinite(genome)):
         raise CandidateRejected('genome contains NaN or infinite values')
-    return EvaluationJob(task, genome)
+    return EvaluationJob(task, genome, share=candidate_share(candidate, task))
+
+
+def candidate_share(candidate, task):
+    """
+    Return a Candidate's racing share (first, end) of its task's worlds, or None for all.
+
+    Candidate.worlds_from / worlds_to (0, 0 from a sender older than the fields, or without
+    racing: every world); raise CandidateRejected for a share outside the task's worlds.
+    """
+    first = int(getattr(candidate, 'worlds_from', 0))
+    end = int(getattr(candidate, 'worlds_to', 0))
+    if not first and not end:
+        return None
+    worlds = len(world_states(task))
+    if not 0 <= first < end <= worlds:
+        raise CandidateRejected(f'worlds {first} to {end}: expected a share within the '
+                                f'{worlds} worlds of task {task.name}')
+    return first, end
 
 
 class EvaluatorInbox:

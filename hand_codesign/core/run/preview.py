@@ -14,8 +14,10 @@ mapping of plain lists, numbers and strings, ready for JSON::
                         orientation or None, objectives}] in world coordinates, and `samples`:
                         every goal sample a trajectory objective scores, also in world
                         coordinates
-    world_scoring       {aggregate, fraction, resample, final_check}: the task's `worlds`
-                        (the mean or the worst fraction of the worlds; fixed or resampled)
+    world_scoring       {aggregate, fraction, resample, final_check, racing}: the task's
+                        `worlds` (the mean or the worst fraction of the worlds; fixed or
+                        resampled); racing None, or {rounds, range, delta, bounds}: the world
+                        indices where a generation's rounds start and end (core.search.racing)
     settings            every key of the task file by its dotted name, its value as read
                         (defaults filled in; core.task.schema, docs/TASK.md)
     changed             those of `settings` whose value is not their key's default
@@ -47,6 +49,7 @@ from hand_codesign.core.search.hierarchy import grown_choices
 from hand_codesign.core.search.hierarchy import GROWN_FROM
 from hand_codesign.core.search.hierarchy import grows_fingers
 from hand_codesign.core.search.hierarchy import REPEATS
+from hand_codesign.core.search.racing import round_bounds
 from hand_codesign.core.sim.events import EventPlan
 from hand_codesign.core.sim.objectives import goal_schedule
 from hand_codesign.core.sim.worlds import object_state, QUANTITIES, world_states
@@ -86,7 +89,7 @@ def preview(task):
         'samples_per_second': task.goals.samples_per_second,
         'randomization': randomization(task),
         'worlds': worlds(task, schedule),
-        'world_scoring': settings(task.worlds),
+        'world_scoring': world_scoring(task),
         'hierarchy': [list(structure) for structure in path + grown],
         'hierarchy_grown': {'count': min(GROWN_FROM, len(grown)),
                             'choices': [list(structure) for structure in grown]},
@@ -219,9 +222,28 @@ def archive_preview(task):
             'emitters': list(optimizer.batch_sizes), 'learning_rate': optimizer.learning_rate}
 
 
+def world_scoring(task):
+    """Return the task's `worlds` by key, its racing as one entry (or None) with its rounds."""
+    scoring = {name: value for name, value in settings(task.worlds).items()
+               if name.partition('.')[0] != 'racing'}
+    scoring['racing'] = racing(task)
+    return scoring
+
+
+def racing(task):
+    """Return the task's racing over the worlds by key, with its rounds' bounds, or None."""
+    spec = task.worlds.racing
+    if spec is None:
+        return None
+    return dict(settings(spec), bounds=list(round_bounds(task.num_world_states, spec.rounds)))
+
+
 def may_end_early(task):
     """Return why a run may simulate less than its budget, one sentence each."""
     reasons = []
+    if task.worlds.racing is not None:
+        reasons.append('racing stops a candidate after a round of its worlds once it cannot '
+                       'be among the mu that CMA-ES selects')
     if task.early_termination is not None:
         reasons.append('early termination (eq. 6) stops a rollout at a check where a goal '
                        'misses by more than its margin')

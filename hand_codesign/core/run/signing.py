@@ -66,7 +66,7 @@ SIGNED_FIELDS = {
         ('controller_mode', 's'), ('gravity_compensation', 'u'),
         ('controller_knot_times', 'f[]'), ('controller_values', 'f[]'), ('controller_kp', 'f[]'),
         ('controller_kd', 'f[]'), ('stage', 'u'), ('held_out_worlds', 'u'),
-        ('world_draw', 'u')),
+        ('world_draw', 'u'), ('worlds_from', 'u'), ('worlds_to', 'u')),
     EVALUATION_TYPE: (
         ('run_id', 's'), ('generation', 'u'), ('candidate_id', 'u'), ('attempt', 'u'),
         ('evaluator_id', 's'), ('status', 'u'), ('reason', 's'), ('objectives', 'f[]'),
@@ -82,7 +82,7 @@ SIGNED_FIELDS = {
         ('best_genome', 'f[]'), ('told_ids', 'u[]'), ('told_objectives', 'f[]'),
         ('evaluations', 'u'), ('wall_time', 'f'), ('final', 'u'), ('stop_reason', 's'),
         ('rejected_evaluations', 'u'), ('audit_evaluations', 'u'), ('audited_ids', 'u[]'),
-        ('quarantined', 's[]'), ('reevaluations', 'u')),
+        ('quarantined', 's[]'), ('reevaluations', 'u'), ('told_worlds', 'u[]')),
     EVALUATOR_STATUS_TYPE: (
         ('evaluator_id', 's'), ('run_id', 's'), ('host', 's'), ('pid', 'u'), ('capacity', 'u'),
         ('load', 'u'), ('evaluations_done', 'u'), ('steps_per_second', 'f'),

@@ -45,6 +45,8 @@ def make_optimizer(task, dim, first_id=0, seed_x=None, seed=None):
         extra = {'stagnation': task.restart_stagnation}
     elif task.algorithm in QD_ALGORITHMS:
         extra = _archive_options(task)
+    elif task.algorithm == 'cma' and task.worlds.racing is not None:
+        extra = {'raced': True}  # core.search.racing
     return classes[task.algorithm](
         dim, task.objective_weights, task.population, task.iterations,
         task.seed if seed is None else seed,

@@ -77,13 +77,15 @@ class Candidate:
 
     `variant` says which version of the run's task it is evaluated on (core.task.variant: its
     structure, worlds, horizon, stage, held-out worlds, resampled draw); the search sets it,
-    the run's task itself until then.
+    the run's task itself until then. `share` (first, end) is a racing round's share of those
+    worlds (core.search.racing; Candidate.worlds_from / worlds_to); () all of them.
     """
 
     candidate_id: int
     generation: int
     x: np.ndarray
     variant: Variant = Variant()
+    share: tuple = ()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -154,6 +156,7 @@ class AskTellOptimizer:
         self._evaluations = 0
         self._pending = None  # the candidates of the generation asked and not yet told
         self._told_ids = set()
+        self._incomplete = set()  # ids of the generation being told that a race stopped early
         self._best = None  # (fitness, candidate_id, generation, x, objectives)
 
     # -- the pycma-like interface ---------------------------------------------------------
@@ -184,12 +187,18 @@ class AskTellOptimizer:
         if self._pending is None:
             raise TellError('tell() without a generation asked: call ask() first')
         candidates, points = self._pending
-        by_id = self._check_results(candidates, results)
+        pairs = list(results.items()) if isinstance(results, Mapping) else list(results)
+        by_id = self._check_results(candidates, pairs)
         objectives = np.array([by_id[c.candidate_id] for c in candidates])
+        # a raced candidate stopped early (core.search.racing) is told the mean of a share of
+        # its worlds: never the best design, and ranked by the optimizer as it says
+        self._incomplete = {int(key) for key, values in pairs
+                            if getattr(values, 'complete', True) is False}
         with self._private_rng():
             self._update(points, objectives)
         for candidate, values in zip(candidates, objectives):
-            self._record_best(candidate, values)
+            if candidate.candidate_id not in self._incomplete:
+                self._record_best(candidate, values)
             self._told_ids.add(candidate.candidate_id)
         self._evaluations += len(candidates)
         self._generation += 1
@@ -337,13 +346,20 @@ class CmaEs(AskTellOptimizer):
 
     pycma's own termination criteria (tolfun, tolx, ...) stay active besides the iteration
     budget; `stop()` returns pycma's dict of the criteria met.
+
+    raced=True (a task with `worlds.racing`, core.search.racing): pycma runs without its
+    negative (active) weights, so only the `selected` best ranks move the distribution, and a
+    candidate told as stopped early (complete=False) is ranked after every complete one, in
+    the order of its fitness so far. The race stops only candidates that at least `selected`
+    complete ones beat, so the ranks that carry weight are all known.
     """
 
     algorithm = 'cma'
 
     def __init__(self, dim, weights, population, iterations, seed, first_id=0, x0=None,
-                 sigma0=SIGMA0):
+                 sigma0=SIGMA0, raced=False):
         super().__init__(dim, weights, population, iterations, seed, first_id, x0, sigma0)
+        self.raced = bool(raced)
         options = {
             # The optimizer seeds its private global generator itself (see _private_rng).
             'seed': np.nan,
@@ -355,6 +371,8 @@ class CmaEs(AskTellOptimizer):
             'verb_log': 0,
             'verb_plot': 0,
         }
+        if self.raced:
+            options['CMA_active'] = False
         with self._private_rng():
             self._es = cma.CMAEvolutionStrategy(self.x0, self.sigma0, options)
         self._before_ask = None
@@ -371,8 +389,22 @@ class CmaEs(AskTellOptimizer):
                                         protocol=pickle.HIGHEST_PROTOCOL)
         return self._es.ask()
 
+    @property
+    def selected(self):
+        """Return mu: how many of a generation's best ranks carry a positive weight."""
+        return int(self._es.sp.weights.mu)
+
+    def _ranking(self, objectives):
+        """Return the fitness pycma ranks by: stopped candidates after every complete one."""
+        fitness = [self.fitness_of(values) for values in objectives]
+        stopped = [candidate.candidate_id in self._incomplete for candidate in self._pending[0]]
+        ceiling = max([value for value, out in zip(fitness, stopped) if not out], default=0.0)
+        # a stopped candidate's fitness so far is positive (core.search.racing): the sum
+        # keeps it above the ceiling and the stopped ones in their order
+        return [ceiling + value if out else value for value, out in zip(fitness, stopped)]
+
     def _update(self, points, objectives):
-        self._es.tell(points, [self.fitness_of(values) for values in objectives])
+        self._es.tell(points, self._ranking(objectives))
         self._before_ask = None
         # pycma's stop() advances counters (e.g. of flat fitness) at every call: check once per
         # generation so that how often callers ask cannot change the run.

@@ -94,8 +94,9 @@ def rebuild_search(task, run_id, source, recorded, genomes, record=None):
     """
     Return the ResumePoint of run run_id of task from its recorded evaluations.
 
-    recorded: id -> objectives as the optimizer was told them (and, for the batch in flight,
-    the first successful answer); genomes: id -> genome as first dispatched; source names the
+    recorded: id -> objectives as the optimizer was told them, or a racing run's
+    core.search.racing.RacedAnswer (and, for the batch in flight, the first successful answer,
+    which a raced run does not take); genomes: id -> genome as first dispatched; source names the
     record in messages. Raise UserError when the record disagrees with the replayed search or
     holds a run that already finished.
     """
@@ -113,6 +114,11 @@ def rebuild_search(task, run_id, source, recorded, genomes, record=None):
             'nothing to resume' + (f'; its best design is candidate {best[0].candidate_id}'
                                    if best else ''))
     pending = search.ask()
+    if task.worlds.racing is not None:
+        # a raced batch's Evaluations answer rounds, not candidates (core.run.rounds): the
+        # batch in flight races again from its first round, to the same results
+        pending_ids = {c.candidate_id for c in pending}
+        recorded = {key: value for key, value in recorded.items() if key not in pending_ids}
     known = {c.candidate_id: recorded[c.candidate_id] for c in pending
              if c.candidate_id in recorded}
     told = sum(1 for candidate_id in recorded if candidate_id not in known)

@@ -45,7 +45,10 @@ Settings chosen to match Bullet on this model (one place; measured in test_mujoc
 The rollout loop is PyBullet's (core.sim.events.play), with one difference in how the steps
 between its events are taken: an open-loop torque policy's torques are known in advance, so
 MuJoCo steps in C (mj_step's nstep) from one torque change or event to the next, with no
-Python per step (test_mujoco_sim checks it is bit for bit the single steps).
+Python per step (test_mujoco_sim checks it is bit for bit the single steps). A PD policy's
+law, eq. (1), is stepped in C as well (core.sim.mujoco_native: mj_step1, the law from
+MuJoCo's inverse dynamics, mj_step2), bit for bit the law in Python (`mujoco_torques`, which
+steps it where no C compiler is at hand; test_mujoco_native).
 
 Unstable simulation: besides the object and joint checks of PyBullet's simulator, MuJoCo resets a
 diverging state by itself and counts a warning; a rollout with such a warning is unstable.
@@ -55,6 +58,7 @@ import math
 from typing import Callable, Optional
 
 from hand_codesign.core.outcomes import CONTACT_DISTANCE
+from hand_codesign.core.sim import mujoco_native
 from hand_codesign.core.sim.events import EventPlans, joints_intact, object_intact, play
 from hand_codesign.core.sim.hand import HandModel
 from hand_codesign.core.sim.policies import TorquePolicy
@@ -243,6 +247,7 @@ class MujocoSimulator(EventPlans):
 
     engine = 'mujoco'
     chunked = True  # step open-loop torques in C between changes and events (False: one by one)
+    native = True  # step a PD policy's law in C (core.sim.mujoco_native) when it can be built
 
     def __init__(self):
         """Start without a model: `build` compiles one per candidate."""
@@ -284,7 +289,7 @@ class MujocoSimulator(EventPlans):
             self.mj_data = mujoco.MjData(self.mj_model)
             self._scratch = None  # the PD law's MjData, made on first use
             self._data_sizes = sizes
-        self._hold_rows = self._hold_until = None
+        self._hold_rows = self._hold_until = self._native_law = None
         self.task, self.model = task, model
         self._joints = model.num_joints
         self._object_body = self.mj_model.body('object').id
@@ -437,10 +442,27 @@ class MujocoSimulator(EventPlans):
             self._hold_rows, self._hold_until = rows, until
         return self._hold_until.__getitem__
 
+    def _native(self, policy, num_steps):
+        """Return the PD law of `policy` in C (NativePD), or None to step it in Python."""
+        if (isinstance(policy, TorquePolicy) or not self.native
+                or mujoco_native.library() is None):
+            return None
+        law = self._native_law
+        if law is None or law[0] is not policy or law[1] != num_steps:
+            law = self._native_law = (policy, num_steps,
+                                      mujoco_native.NativePD(policy, num_steps))
+        return law[2]
+
     def _run(self, policy, plan, trace, state, on_frame):
         m, d = self.mj_model, self.mj_data
         if self._scratch is None and not isinstance(policy, TorquePolicy):
             self._scratch = mujoco.MjData(m)
+        native = self._native(policy, plan.num_steps)
+        if native is not None:
+            def advance_native(done, stop):
+                native.advance(m, d, self._scratch, done, stop)
+            return play(plan, trace, state, advance_native, self.object_pose, self._stable,
+                        on_frame, self)
         torques = mujoco_torques(policy, m, d, plan.num_steps, self._scratch)
         until = self._holds(policy, plan.num_steps)
         joints = self._joints

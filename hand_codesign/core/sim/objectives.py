@@ -91,6 +91,12 @@ def task_torque_penalty(task: Task, torques):
     return 0.0 if spec is None else torque_penalty(torques, spec.threshold, spec.weight)
 
 
+def design_torque_penalty(task: Task, design):
+    """Return eq. (2) of a Design on `task`: its torque values', 0 for a PD policy."""
+    return task_torque_penalty(task, design.controller.values
+                               if task.policy.kind == 'torque' else ())
+
+
 def position_distance(actual, desired, metric='euclidean', mask=None):
     """
     Return eq. (3): the Euclidean or Manhattan distance over the last axis.

@@ -29,10 +29,11 @@ from hand_codesign.core.task.parts import (ALGORITHMS, ArchiveSpec, AXES, Bounds
                                            HorizonSpec, MORPHOLOGY_PARAMETERS, MorphologySpec,
                                            ObjectSpec, OrientationGoal, PARAMETER_MODES,
                                            ParameterSpec, PhysicsSpec, POLICY_KINDS, PolicySpec,
-                                           PositionGoal, RandomizationSpec, resting_height,
-                                           RESTING_TOLERANCE, SHAPES, STARTS, SymmetrySpec,
-                                           TaskError, TORQUE_MODES, TorquePenaltySpec, WeightsSpec,
-                                           WORLD_AGGREGATES, WORLD_RESAMPLING, WorldsSpec)
+                                           PositionGoal, RacingSpec, RandomizationSpec,
+                                           resting_height, RESTING_TOLERANCE, SHAPES, STARTS,
+                                           SymmetrySpec, TaskError, TORQUE_MODES,
+                                           TorquePenaltySpec, WeightsSpec, WORLD_AGGREGATES,
+                                           WORLD_RESAMPLING, WorldsSpec)
 from hand_codesign.core.task.reader import load_task, parse_design, parse_task
 from hand_codesign.core.task.spec import Task
 
@@ -41,7 +42,7 @@ __all__ = [
     'EarlyTerminationSpec', 'GoalSpec', 'HandSpec', 'HierarchySpec', 'HorizonSpec', 'load_task',
     'MORPHOLOGY_PARAMETERS', 'MorphologySpec', 'ObjectSpec', 'OrientationGoal', 'PARAMETER_MODES',
     'ParameterSpec', 'parse_design', 'parse_task', 'PhysicsSpec', 'POLICY_KINDS', 'PolicySpec',
-    'PositionGoal', 'RandomizationSpec', 'resting_height', 'RESTING_TOLERANCE', 'SHAPES', 'STARTS',
-    'SymmetrySpec', 'Task', 'TaskError', 'TORQUE_MODES', 'TorquePenaltySpec', 'WeightsSpec',
-    'WORLD_AGGREGATES', 'WORLD_RESAMPLING', 'WorldsSpec',
+    'PositionGoal', 'RacingSpec', 'RandomizationSpec', 'resting_height', 'RESTING_TOLERANCE',
+    'SHAPES', 'STARTS', 'SymmetrySpec', 'Task', 'TaskError', 'TORQUE_MODES', 'TorquePenaltySpec',
+    'WeightsSpec', 'WORLD_AGGREGATES', 'WORLD_RESAMPLING', 'WorldsSpec',
 ]

@@ -90,11 +90,24 @@ def _check_worlds(task, fail):
                 fail('worlds.resample', f'none in a task with {what} (not supported: the '
                      'final check of resampled generations assumes one optimization on full '
                      f'rollouts), got {task.worlds.resample!r}')
+    if task.worlds.racing is not None:
+        _check_racing(task, fail)
     draw = task.world_draw
     if isinstance(draw, bool) or not isinstance(draw, (int, np.integer)) or draw < 0:
         fail('world_draw', f'an integer >= 0 (0: the fixed worlds), got {draw!r}')
     if draw and task.held_out:
         fail('world_draw', f'0 for the held-out worlds (one stream or the other), got {draw!r}')
+
+
+def _check_racing(task, fail):
+    # why: the race's bound ranks by the weighted sum and its mean over worlds, and the update
+    # must be able to leave the candidates it stopped out (core.search.racing)
+    if task.algorithm != 'cma':
+        fail('worlds.racing', f'no racing with optimizer.algorithm {task.algorithm} (racing '
+             'selects the mu best of a CMA-ES generation by their weighted sum: cma only)')
+    if task.worlds.aggregate != 'mean':
+        fail('worlds.racing', 'no racing with aggregate: worst (its bound is on the mean over '
+             'the worlds, eq. 5)')
 
 
 def _check_stages(task, fail):

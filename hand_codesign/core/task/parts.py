@@ -348,6 +348,30 @@ class WeightsSpec:
 
 
 @dataclass(frozen=True)
+class RacingSpec:
+    """
+    Racing over the worlds (YAML `worlds.racing`, optional; not in the paper; off by default).
+
+    A generation's candidates meet their worlds in `rounds` rounds of about equal shares; after
+    each round a candidate stops once it can no longer be among the mu that CMA-ES selects,
+    by a bound on what its remaining worlds can add (core.search.racing): each world's
+    weighted objectives (the fitness of one world), less what the generation's candidates
+    share on that world, are taken to lie in a band `range` wide, and the bound holds for
+    every candidate and round at once with probability 1 - `delta`.
+    """
+
+    rounds: int = key("the rounds a generation's worlds are met in, of about equal shares",
+                      'integer', minimum=2, default=4)
+    # YAML `range` (a builtin's name as a field)
+    value_range: float = key(
+        "the width of the band a world's weighted objectives lie in, less what the "
+        "generation's candidates share on that world", 'number', unit='m', positive=True,
+        default=0.1, yaml='range')
+    delta: float = key('the chance that any bound of a generation fails', 'number',
+                       interval='(0, 1)', noun='a probability', default=0.05)
+
+
+@dataclass(frozen=True)
 class WorldsSpec:
     """
     How a candidate's worlds are scored and drawn (YAML `worlds`, optional; defaults: eq. 5).
@@ -378,6 +402,11 @@ class WorldsSpec:
         'the last generations whose best designs are checked on the fixed worlds; the best '
         "there is the run's result", 'integer', default=FINAL_CHECK,
         when=('resample', ('generation',), 'with resample: {}'))
+    # None: every candidate meets every world (eq. 5)
+    racing: Optional[RacingSpec] = key(
+        "a generation's worlds met in rounds, a candidate stopped once it cannot be among the "
+        'mu CMA-ES selects (core.search.racing; cma with aggregate: mean only; {}: the '
+        'defaults)', 'section', section=RacingSpec, default=None)
 
     @property
     def worst_fraction(self):
