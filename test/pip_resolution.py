@@ -34,14 +34,21 @@ def normalized(name):
     return re.sub(r'[-_.]+', '-', name).lower()
 
 
-def pins(path):
-    """Return {normalized name: version} of the `name==version` lines of a requirements file."""
+def target(python_version):
+    """Return the marker environment of a plain install on python_version (e.g. '3.12')."""
+    return dict(default_environment(), python_version=python_version,
+                python_full_version=f'{python_version}.0', extra='')
+
+
+def pins(path, python_version='3.12'):
+    """Return {normalized name: version} of a requirements file's pins for python_version."""
     found = {}
     for line in pathlib.Path(path).read_text().splitlines():
         line = line.split('#')[0].strip()
         if '==' in line:
             requirement = Requirement(line)
-            found[normalized(requirement.name)] = str(requirement.specifier)[2:]
+            if requirement.marker is None or requirement.marker.evaluate(target(python_version)):
+                found[normalized(requirement.name)] = str(requirement.specifier)[2:]
     return found
 
 
@@ -99,20 +106,31 @@ def resolve_compiled_here(version, python_version, folder):
     return item['metadata'], item['download_info']['url'].rsplit('/', 1)[-1]
 
 
-def requirement_lines(path, leave_out=()):
-    """Return the requirement lines of a file, without comments and the names left out."""
+def requirement_lines(path, python_version, leave_out=()):
+    """
+    Return a file's requirements for python_version, their markers applied, as lines.
+
+    pip judges a marker by the Python it runs on, not by --python-version: so the lines
+    come without markers, those not for python_version and the names in leave_out left out.
+    """
     lines = []
     for line in pathlib.Path(path).read_text().splitlines():
         line = line.split('#')[0].strip()
-        if line and normalized(Requirement(line).name) not in leave_out:
-            lines.append(line)
+        if not line:
+            continue
+        requirement = Requirement(line)
+        if normalized(requirement.name) in leave_out or not (
+                requirement.marker is None
+                or requirement.marker.evaluate(target(python_version))):
+            continue
+        requirement.marker = None
+        lines.append(str(requirement))
     return lines
 
 
 def numpy_requirements(metadata, python_version):
     """Return the numpy requirements a package states for a plain install on python_version."""
-    environment = dict(default_environment(), python_version=python_version,
-                       python_full_version=f'{python_version}.0', extra='')
+    environment = target(python_version)
     found = []
     for text in metadata.get('requires_dist', []):
         requirement = Requirement(text)

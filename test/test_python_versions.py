@@ -56,9 +56,9 @@ def test_make_accepts_python_3_11_to_3_13_only(tmp_path, version):
 
 @pytest.mark.parametrize('version', VERSIONS)
 def test_pinned_requirements_resolve_for(version, tmp_path, source_wheels):
-    lock = pins(ROOT / 'requirements-lock.txt')
-    top = pins(ROOT / 'requirements.txt')
-    lines = requirement_lines(ROOT / 'requirements.txt', leave_out={COMPILED_HERE})
+    lock = pins(ROOT / 'requirements-lock.txt', version)
+    top = pins(ROOT / 'requirements.txt', version)
+    lines = requirement_lines(ROOT / 'requirements.txt', version, leave_out={COMPILED_HERE})
     resolved = resolve(lines, version, tmp_path, source_wheels,
                        constraints=[ROOT / 'requirements-lock.txt'])
     unpinned = {name: data['version'] for name, data in resolved.items()
