@@ -15,7 +15,7 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 export PIP_DISABLE_PIP_VERSION_CHECK := 1
 
 DEMO_TASK ?= config/tasks/task5.yaml
-DEMO_ARGS ?= --evaluators 2 --iterations 30 --popsize 16 --world-states 16 --seed 1
+DEMO_ARGS ?= --evaluators 2 --iterations 30 --population 16 --world-states 16 --seed 1
 TEST_ARGS ?=
 
 .PHONY: setup fast-physics demo test clean

@@ -44,7 +44,7 @@ MCAP_MAGIC = b'\x89MCAP0\r\n'
 DRAWN = ('palm', 'segments', 'joint_axes')
 # the Foxglove WebSocket protocol: foxglove-sdk's name for it, and the older one
 SUBPROTOCOLS = ['foxglove.sdk.v1', 'foxglove.websocket.v1']
-LIVE_BUDGET = ['--iterations', '3', '--popsize', '4', '--world-states', '1', '--seed', '3']
+LIVE_BUDGET = ['--iterations', '3', '--population', '4', '--world-states', '1', '--seed', '3']
 
 
 def marker_positions(markers, groups=DRAWN):

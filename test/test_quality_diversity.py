@@ -295,7 +295,7 @@ def test_a_bad_archive_key_is_one_line_naming_file_and_key(algorithm, archive, e
     assert f'{path}: {expected}' in err
 
 
-BUDGET = ['--iterations', '3', '--popsize', '8', '--world-states', '2', '--seed', '3']
+BUDGET = ['--iterations', '3', '--population', '8', '--world-states', '2', '--seed', '3']
 
 
 @pytest.fixture(scope='module')

@@ -52,7 +52,7 @@ Schema (every key is required unless marked optional; unknown keys are errors)::
       friction: [-0.1, 0.1]          # delta added to object.friction
       scale: [0.66, 1.5]             # factor on every object dimension
       mass: [0.66, 1.5]              # factor on object.mass
-    num_world_states: 8
+    world_states: 8                  # randomized worlds per candidate (old name: num_world_states)
     morphology:                      # each: a parameter setting (see below)
       initial_angle: {bounds: [-pi/2, pi/2]}
       finger_position_x: {fixed: [-0.055, 0.055]}
@@ -131,7 +131,7 @@ symmetry). Without it every turn counts, as in the paper.
   `aggregate: worst` with `fraction: f` in (0, 1] averages it over the worst f of the worlds
   only, its conditional value at risk (core.sim.objectives.combine_worlds), so the search favours
   designs that hold up in their bad worlds rather than on average.
-- `resample: none` (default) evaluates every candidate on the same `num_world_states` worlds
+- `resample: none` (default) evaluates every candidate on the same `world_states` worlds
   of the seed; `resample: generation` draws fresh worlds for each generation (another stream of
   the seed, core.sim.worlds), so the design cannot fit one set of worlds. The run then reports the
   best, re-evaluated on the fixed worlds, of the best designs of the last `final_check`

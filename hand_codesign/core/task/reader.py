@@ -22,7 +22,11 @@ from hand_codesign.core.task.parts import (ALGORITHMS, AXES, DISTANCES, GoalSpec
 from hand_codesign.core.task.settings_reader import SettingsReader
 from hand_codesign.core.task.spec import Task
 from hand_codesign.core.task.values import join_key
+from hand_codesign.deprecation import warn_old_name
 import yaml
+
+# an old top-level key -> its name now (hand_codesign.deprecation): read under either name
+OLD_KEYS = {'num_world_states': 'world_states'}
 
 
 def load_task(path):
@@ -41,23 +45,25 @@ def load_task(path):
     except UnicodeDecodeError as error:
         raise TaskError(f'{path}: expected a task file in UTF-8 text, got byte '
                         f'0x{error.object[error.start]:02x} at offset {error.start}') from None
-    return parse_task(text, source=str(path))
+    return parse_task(text, source=str(path), warn_old_names=True)
 
 
-def parse_task(text, source='<task>'):
+def parse_task(text, source='<task>', warn_old_names=False):
     """
     Validate YAML text into a Task (core.task.spec), as load_task does for a file.
 
     text: the YAML of a task; source: what names it in errors (a path or 'run ID task'),
     also the folder a seed design's file is read from. The Task keeps the text as
-    `source_text`. Raises TaskError naming source, the dotted key and what was expected.
+    `source_text`. An old key name (OLD_KEYS) is read as the new one, with a warning if
+    warn_old_names (a file the user edits; not a bag's record). Raises TaskError naming source,
+    the dotted key and what was expected.
     """
     try:
         document = yaml.safe_load(text)
     except yaml.YAMLError as error:
         raise TaskError(f'{source}: not valid YAML: {_yaml_problem(error)}') from None
     reader = _Reader(source)
-    task = reader.task(document)
+    task = reader.task(renamed_keys(document, source, warn_old_names))
     task = dataclasses.replace(task, source=source, source_text=text)
     check_task(task)
     return task
@@ -68,13 +74,29 @@ def parse_design(document, source, key='design'):
     return _Reader(source).design(document, key)
 
 
+def renamed_keys(document, source, warn):
+    """Return the document with each old top-level key (OLD_KEYS) under its new name."""
+    if not isinstance(document, dict) or not set(OLD_KEYS) & set(document):
+        return document
+    document = dict(document)
+    for old, new in OLD_KEYS.items():
+        if old not in document:
+            continue
+        if new in document:
+            raise TaskError(f'{source}: {old} and {new} are one setting given twice: keep {new}')
+        if warn:
+            warn_old_name(old, new, f'{source}: task key ')
+        document[new] = document.pop(old)
+    return document
+
+
 class _Reader(SettingsReader, DesignReader):
     """Walks the parsed YAML, checking keys and types with dotted paths for errors."""
 
     def task(self, document):
         top = self.mapping(document, '', required=(
             'name', 'seed', 'time_step', 'duration', 'object', 'hand', 'goals',
-            'randomization', 'num_world_states', 'morphology', 'policy', 'optimizer'),
+            'randomization', 'world_states', 'morphology', 'policy', 'optimizer'),
             optional=('description', 'torque_penalty', 'early_termination', 'weights',
                       'hierarchy', 'seed_design', 'two_stage', 'physics', 'worlds'))
         hierarchy = (self.hierarchy(top['hierarchy'], 'hierarchy')
@@ -101,7 +123,7 @@ class _Reader(SettingsReader, DesignReader):
             structure=structure,
             goals=self.goals(top['goals'], 'goals'),
             randomization=self.randomization(top['randomization'], 'randomization'),
-            num_world_states=self.integer(top['num_world_states'], 'num_world_states'),
+            num_world_states=self.integer(top['world_states'], 'world_states'),
             morphology=self.morphology(top['morphology'], 'morphology'),
             policy=self.policy(top['policy'], 'policy'),
             algorithm=self.choice(optimizer['algorithm'], 'optimizer.algorithm', ALGORITHMS),
