@@ -39,7 +39,7 @@ EXAMPLES = {
     'check': 'hand-codesign check config/tasks/task5.yaml --population 16',
     'run': 'hand-codesign run --task config/tasks/task5.yaml --evaluators 2 --bag bags/my-run \\\n'
            '      --seed 1 --iterations 30 --population 16 --world-states 16',
-    'analyze': 'hand-codesign analyze bags/my-run --unseen 1000',
+    'analyze': 'hand-codesign analyze bags/my-run --unseen 1000 --format svg',
     'replay': 'hand-codesign replay bags/my-run --gif bags/my-run.gif',
     'robustness': 'hand-codesign robustness bags/my-run --samples 729',
     'export': 'hand-codesign export bags/my-run --out bags/my-run-hand',
@@ -210,6 +210,8 @@ def add_bag_arguments(verb, parser):
         parser.add_argument('--engine', choices=('pybullet', 'mujoco'),
                             help='with --unseen: the physics engine to measure in '
                                  "(default: the run's)")
+        parser.add_argument('--format', choices=('png', 'svg', 'pdf'), default='png',
+                            help='file format of the figures (default png)')
     elif verb == 'replay':
         parser.add_argument('--generation', type=int,
                             help="generation (default: the run's best design's)")
