@@ -27,6 +27,7 @@ earlier measure (resting on a limit while touching, whatever the outcome).
 import json
 import pathlib
 
+from hand_codesign.analysis import campaign_figures
 from hand_codesign.analysis import records
 from hand_codesign.analysis.generations import Generations, generations_from_summaries
 from hand_codesign.analysis.tables import write_csv
@@ -301,45 +302,8 @@ def seed_percents(shares):
 
 
 def plot_errors(path, groups, tolerance, title, kinds=None):
-    """
-    Box plots of the pooled initial and final errors per group [(label, record list)].
-
-    One panel per error kind (default: the tolerance's); the tolerance is drawn on its own.
-    The file's suffix (.png, .svg, .pdf) is its format.
-    """
-    import matplotlib
-    matplotlib.use('Agg')
-    from matplotlib import pyplot
-    kinds = kinds or (tolerance.kind,)
-    width = max(6.0, 1.1 * len(groups) + 2)
-    figure, axes = pyplot.subplots(1, len(kinds), figsize=(width * len(kinds), 4.5),
-                                   squeeze=False)
-    for axis, kind in zip(axes[0], kinds):
-        scale, unit = {'orientation': (1.0, 'rad'), 'pose': (1.0, 'tolerances')}.get(
-            kind, (1000.0, 'mm'))
-        data, positions = [], []
-        for index, (_, measured) in enumerate(groups):
-            for offset, field in ((-0.18, 'initial_errors'), (0.18, 'errors')):
-                data.append(np.concatenate([record['worlds'][field][kind]
-                                            for record in measured]) * scale)
-                positions.append(index + 1 + offset)
-        boxes = axis.boxplot(data, positions=positions, widths=0.3, whis=(5, 95),
-                             showfliers=False, patch_artist=True)
-        for number, patch in enumerate(boxes['boxes']):
-            patch.set_facecolor('lightgrey' if number % 2 == 0 else 'tab:blue')
-        if kind == tolerance.kind:
-            axis.axhline(tolerance.limit * scale, color='tab:red', linestyle='--',
-                         linewidth=1, label=f'tolerance ({tolerance.describe()})')
-            axis.legend(fontsize='small')
-        axis.set_xticks(range(1, len(groups) + 1), [label for label, _ in groups],
-                        rotation=30, ha='right', fontsize='small')
-        axis.set_ylabel(f'{kind} error ({unit}), grey: start, blue: end')
-        axis.grid(True, axis='y', alpha=0.3)
-    figure.suptitle(f'{title}\nbox p25-p75, whiskers p5-p95, unseen worlds of every seed',
-                    fontsize='medium')
-    figure.tight_layout()
-    figure.savefig(path, dpi=90)
-    pyplot.close(figure)
+    """Box plots of the pooled initial and final errors per group (campaign_figures)."""
+    campaign_figures.plot_errors(path, groups, tolerance, title, kinds)
 
 
 def run_generations(bags):
@@ -391,37 +355,8 @@ def seed_band(curves):
 
 
 def plot_convergence(path, panels, title):
-    """
-    Best fitness so far against evaluations, every configuration on one shared axis.
-
-    Per configuration (one colour): the median across seeds as a line and the band between
-    the 25th and 75th percentiles, over thin lines of the seeds. The file's suffix (.png,
-    .svg, .pdf) is its format.
-    """
-    import matplotlib
-    matplotlib.use('Agg')
-    from matplotlib import pyplot
-    figure, axis = pyplot.subplots(figsize=(7.5, 4.8))
-    for index, (label, curves) in enumerate(panels):
-        colour = f'C{index % 10}'
-        for _, (told, best) in curves:
-            if len(told):
-                axis.step(told, best, where='post', color=colour, linewidth=0.6, alpha=0.35)
-        grid, low, middle, high = seed_band(curves)
-        seeds = sum(1 for _, (told, _) in curves if len(told))
-        axis.fill_between(grid, low, high, step='post', color=colour, alpha=0.2, linewidth=0)
-        axis.step(grid, middle, where='post', color=colour, linewidth=2,
-                  label=f'{label}: median of {seeds} seeds')
-    axis.set_yscale('log')
-    axis.set_xlabel('evaluations')
-    axis.set_ylabel('best weighted fitness so far')
-    axis.grid(True, alpha=0.3)
-    axis.legend(fontsize='small')
-    axis.set_title(f'{title}\nmedian across seeds, band: 25th to 75th percentile, thin: '
-                   'each seed', fontsize='medium')
-    figure.tight_layout()
-    figure.savefig(path, dpi=90)
-    pyplot.close(figure)
+    """Best fitness so far against evaluations per configuration (campaign_figures)."""
+    campaign_figures.plot_convergence(path, panels, title, seed_band)
 
 
 def read_campaign(out):
