@@ -216,8 +216,8 @@ def test_evaluator_plots_read_any_number_of_evaluators():
     status = '/' + contract.EVALUATOR_STATUS
     series = [path for config in layout['configById'].values()
               for path in config.get('paths', []) if path['value'].startswith(status)]
-    assert {path['value'] for path in series} >= {f'{status}.steps_per_second',
-                                                   f'{status}.evaluations_done'}
+    wanted = {f'{status}.steps_per_second', f'{status}.evaluations_done'}
+    assert {path['value'] for path in series} >= wanted
     assert all(path['showLine'] is False and '{' not in path['value'] for path in series)
     assert layout['globalVariables'] == {}
 
