@@ -15,10 +15,10 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 export PIP_DISABLE_PIP_VERSION_CHECK := 1
 
 DEMO_TASK ?= config/tasks/task5.yaml
-DEMO_ARGS ?= --evaluators 2 --iterations 30 --popsize 16 --world-states 16 --seed 1
+DEMO_ARGS ?= --evaluators 2 --iterations 30 --population 16 --world-states 16 --seed 1
 TEST_ARGS ?=
 
-.PHONY: setup fast-physics demo test clean
+.PHONY: setup fast-physics demo test clean animation
 
 # The PyPI wheel of PyBullet; `make fast-physics` swaps in a faster build of it (below).
 setup: $(STAMPS)/package
@@ -65,6 +65,16 @@ demo: setup
 	@bag=bags/demo-$$(date +%Y%m%d-%H%M%S) && \
 	  $(VENV)/bin/hand-codesign run --task $(DEMO_TASK) --bag $$bag $(DEMO_ARGS) && \
 	  $(VENV)/bin/hand-codesign analyze $$bag
+
+# The README's animation: a short real Task 5 co-design (about a minute), then the best
+# design's rollout in world 0 re-simulated, checked against the bag and drawn as a GIF.
+ANIMATION ?= docs/best_rollout.gif
+ANIMATION_ARGS ?= --evaluators 2 --iterations 30 --population 16 --world-states 16 --seed 1
+animation: setup
+	@mkdir -p bags && rm -rf bags/readme-animation
+	@$(VENV)/bin/hand-codesign run --task config/tasks/task5.yaml --bag bags/readme-animation \
+	  $(ANIMATION_ARGS) --domain-id auto --quiet
+	@$(VENV)/bin/hand-codesign replay bags/readme-animation --gif $(ANIMATION)
 
 test: setup
 	$(PY) -m pytest test $(TEST_ARGS)

@@ -14,7 +14,8 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/launch', glob.glob('launch/*.launch.py')),
-        ('share/' + package_name + '/config', glob.glob('config/*.yaml')),
+        ('share/' + package_name + '/config',
+         glob.glob('config/*.yaml') + glob.glob('config/*.json')),   # the Foxglove layout
         ('share/' + package_name + '/config/tasks', glob.glob('config/tasks/*.yaml')),
         ('share/' + package_name + '/config/reproduce', glob.glob('config/reproduce/*.yaml')),
     ],

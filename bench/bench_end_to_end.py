@@ -11,7 +11,7 @@ candidate counted once, over the wall time from the first candidate recorded to 
 evaluation. Prints the ratio of the fastest runs (target >= 1.3) and whether both versions
 told the search the same generations (they must: the same best design, bit for bit).
 
-Usage: python bench/bench_end_to_end.py [--iterations 3] [--popsize 80] [--world-states 64]
+Usage: python bench/bench_end_to_end.py [--iterations 3] [--population 80] [--world-states 64]
                                         [--turns 2] [--reference COMMIT]
 """
 
@@ -51,7 +51,9 @@ def run(tree, module_paths, arguments, bag):
     """Run Task 5 with the package in `tree`; return the bag's end-to-end steps per second."""
     command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(tree / TASK),
                '--evaluators', '2', '--bag', str(bag), '--quiet', '--seed', '1',
-               '--iterations', str(arguments.iterations), '--popsize', str(arguments.popsize),
+               '--iterations', str(arguments.iterations),
+               # the reference's `run` knows the old name only
+               '--population' if tree == ROOT else '--popsize', str(arguments.population),
                '--world-states', str(arguments.world_states)]
     if tree == ROOT:  # a free domain; the reference's `run` picked one without being asked
         command += ['--domain-id', 'auto']
@@ -72,7 +74,7 @@ def listed(rates):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument('--iterations', type=int, default=3)
-    parser.add_argument('--popsize', type=int, default=80)
+    parser.add_argument('--population', type=int, default=80)
     parser.add_argument('--world-states', type=int, default=64)
     parser.add_argument('--turns', type=int, default=2, help='runs of each version, alternated')
     parser.add_argument('--reference', default=REFERENCE, help='commit to compare against')
@@ -91,7 +93,7 @@ def main():
                 rates[version].append(run(tree, paths, arguments, bag))
                 summaries.setdefault(version, best_fitnesses(bag))
     best = {version: max(values) for version, values in rates.items()}
-    print(f'Task 5, {arguments.iterations} generations x {arguments.popsize} candidates x '
+    print(f'Task 5, {arguments.iterations} generations x {arguments.population} candidates x '
           f'{arguments.world_states} worlds, 2 evaluators, seed 1; fastest of {arguments.turns} '
           f'alternate runs ({time.strftime("%H:%M:%S")}, load average '
           f'{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)')

@@ -24,7 +24,7 @@ The shipped model is not changed: each setting rewrites the built MjSpec's solre
 (geoms, the object-ground pair, joint limits) before it is compiled.
 
 Usage: python bench/bench_engine_softness.py [--scales 1 4 16] [--cones pyramidal ...]
-       [--designs 200] [--generations 25] [--popsize 16] [--world-states 8]
+       [--designs 200] [--generations 25] [--population 16] [--world-states 8]
        [--out docs/results/engine-softness]   (from the repository's root)
 """
 
@@ -133,7 +133,7 @@ def main():
     parser.add_argument('--cones', nargs='+', choices=sorted(CONES), default=['pyramidal'])
     parser.add_argument('--designs', type=int, default=200)
     parser.add_argument('--generations', type=int, default=25)
-    parser.add_argument('--popsize', type=int, default=16)
+    parser.add_argument('--population', type=int, default=16)
     parser.add_argument('--world-states', type=int, default=8)
     parser.add_argument('--out', default=None,
                         help='write OUT.csv and OUT.md (e.g. docs/results/engine-softness)')
@@ -141,13 +141,13 @@ def main():
     tasks = {}
     for name in ('task5', 'task6'):
         task = load_task(TASKS / f'{name}.yaml').replace(
-            num_world_states=arguments.world_states, population=arguments.popsize, seed=1,
+            num_world_states=arguments.world_states, population=arguments.population, seed=1,
             iterations=10 ** 6)
         genomes, fitness = searched_designs(task, arguments.generations, arguments.designs)
         objectives = np.array([evaluate(x, task).objectives for x in genomes])
         tasks[name] = (task, genomes, fitness, objectives)
         print(f'{name}: {len(genomes)} designs from {arguments.generations} x '
-              f'{arguments.popsize} CMA-ES on PyBullet, {arguments.world_states} worlds each')
+              f'{arguments.population} CMA-ES on PyBullet, {arguments.world_states} worlds each')
     probe_task = tasks['task5'][0].replace(num_world_states=1)
     with Simulator() as bullet:
         bullet_overshoot = limit_overshoot(bullet, probe_task)
@@ -193,8 +193,8 @@ def write_tables(arguments, rows, bullet_overshoot):
     lines = [
         '# MuJoCo softness against agreement with PyBullet (issue 27)', '',
         f'`python bench/bench_engine_softness.py --scales {scales} --cones {cones} '
-        f'--designs {arguments.designs} --generations {arguments.generations} --popsize '
-        f'{arguments.popsize} --world-states {arguments.world_states} --out {arguments.out}`. '
+        f'--designs {arguments.designs} --generations {arguments.generations} --population '
+        f'{arguments.population} --world-states {arguments.world_states} --out {arguments.out}`. '
         "Scales multiply the time constant of MuJoCo's joint limits and contacts (1: the "
         "shipped time constants); cone: MuJoCo's friction cone (shipped: elliptic, chosen on "
         'this table). Spearman: rank correlation of the weighted sum over the designs of a '

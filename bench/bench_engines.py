@@ -3,7 +3,7 @@ Benchmark and cross-check of the two physics engines (PyBullet, MuJoCo) on Tasks
 
 Measures, in one run, per task:
 - the designs: --designs candidates spread evenly over a seeded CMA-ES search of the task on
-  PyBullet (Table I's settings, --generations x --popsize, --world-states worlds), those that
+  PyBullet (Table I's settings, --generations x --population, --world-states worlds), those that
   are simulated (no start collision; bench_physics.searched_designs);
 - speed: evaluate() per core (CPU time of this process), MuJoCo over PyBullet, on the same
   designs and worlds, in interleaved rounds, best of --rounds (target >= 2.0);
@@ -25,8 +25,8 @@ two processes at once, per engine (wall seconds of the slower): a run's two eval
 the machine's two cores, its caches and memory, and an engine may suffer more from that.
 
 Usage: python bench/bench_engines.py [--tasks task5 task6 | task1 task5_pd] [--designs 200]
-       [--generations 25] [--popsize 16] [--world-states 8] [--speed-sample 12] [--rounds 3]
-       [--collision-pairs 1000]
+       [--generations 25] [--population 16] [--world-states 8] [--speed-sample 12]
+       [--rounds 3] [--collision-pairs 1000]
        python bench/bench_engines.py --bags BAG [BAG ...] [--speed-sample 12] [--rounds 3]
 """
 
@@ -111,7 +111,7 @@ def collision_agreement(task, pairs, seed=5):
 def bench_task(name, arguments):
     """Print the figures of one task."""
     reference = load_task(os.path.join(TASKS, name + '.yaml')).replace(
-        num_world_states=arguments.world_states, population=arguments.popsize, seed=1,
+        num_world_states=arguments.world_states, population=arguments.population, seed=1,
         iterations=10 ** 6)
     mujoco = on_engine(reference, 'mujoco')
     started = time.perf_counter()
@@ -125,7 +125,7 @@ def bench_task(name, arguments):
     law = (pd_law_ratio(mujoco, sample, arguments.rounds) if reference.policy.kind == 'pd'
            else None)
     agree, pairs, colliding = collision_agreement(reference, arguments.collision_pairs)
-    print(f'{name}: {len(genomes)} designs from {arguments.generations} x {arguments.popsize} '
+    print(f'{name}: {len(genomes)} designs from {arguments.generations} x {arguments.population} '
           f'CMA-ES on PyBullet, {arguments.world_states} worlds each '
           f'({time.perf_counter() - started:.0f} s)')
     print(f'  evaluate() per core, MuJoCo over PyBullet: {bullet_seconds / mujoco_seconds:.2f} '
@@ -187,7 +187,7 @@ def main():
     parser.add_argument('--tasks', nargs='+', default=['task5', 'task6'])
     parser.add_argument('--designs', type=int, default=200)
     parser.add_argument('--generations', type=int, default=25)
-    parser.add_argument('--popsize', type=int, default=16)
+    parser.add_argument('--population', type=int, default=16)
     parser.add_argument('--world-states', type=int, default=8)
     parser.add_argument('--speed-sample', type=int, default=12)
     parser.add_argument('--rounds', type=int, default=3)

@@ -3,7 +3,7 @@ Benchmark and validation of cheaper physics settings (a task's `physics` section
 
 Measures, in one run:
 - the designs: --designs candidates spread evenly over a seeded CMA-ES search on Task 5
-  (Table I's settings, --generations x --popsize), those that are simulated (no start
+  (Table I's settings, --generations x --population), those that are simulated (no start
   collision), with their fitness;
 - speed: evaluate() with the cheaper settings over a sample of those designs against
   bench_core's bare loop (stepping and torques only, Table I's settings), in interleaved
@@ -18,7 +18,7 @@ Measures, in one run:
 
 Usage: python bench/bench_physics.py [--solver-iterations 5]
        [--contact-breaking-threshold 0.005] [--designs 200] [--generations 50]
-       [--popsize 16] [--world-states 8]
+       [--population 16] [--world-states 8]
 """
 
 import argparse
@@ -130,13 +130,13 @@ def main():
     parser.add_argument('--contact-breaking-threshold', type=float, default=0.005)
     parser.add_argument('--designs', type=int, default=200)
     parser.add_argument('--generations', type=int, default=50)
-    parser.add_argument('--popsize', type=int, default=16)
+    parser.add_argument('--population', type=int, default=16)
     parser.add_argument('--world-states', type=int, default=8)
     parser.add_argument('--speed-sample', type=int, default=16)
     parser.add_argument('--robust-designs', type=int, default=3)
     arguments = parser.parse_args()
     reference = load_task(TASK_FILE).replace(
-        num_world_states=arguments.world_states, population=arguments.popsize, seed=1,
+        num_world_states=arguments.world_states, population=arguments.population, seed=1,
         iterations=10 ** 6)
     fast = reference.replace(physics=PhysicsSpec(
         arguments.solver_iterations, arguments.contact_breaking_threshold))
@@ -149,7 +149,8 @@ def main():
     print(f'Task 5, physics {fast.physics} against the Table I defaults {reference.physics} '
           f'({time.strftime("%H:%M:%S")})')
     print(f'  {len(genomes)} designs over a CMA-ES run ({arguments.generations} x '
-          f'{arguments.popsize}, {arguments.world_states} worlds), fitness {fitness.min():.4f} to '
+          f'{arguments.population}, {arguments.world_states} worlds), fitness '
+          f'{fitness.min():.4f} to '
           f'{fitness.max():.4f}')
     print(f'  bare loop, Table I physics      {raw:9.0f} steps/s')
     print(f'  evaluate(), cheaper physics     {rate:9.0f} steps/s   '

@@ -20,7 +20,7 @@ and prints:
 On a machine with fewer cores than evaluators the evaluators take turns; the per-candidate
 figures are CPU times, not wall times, so they hold all the same.
 
-Run: python bench/bench_scale.py [--evaluators 32] [--popsize 64] [--iterations 3]
+Run: python bench/bench_scale.py [--evaluators 32] [--population 64] [--iterations 3]
 """
 
 import argparse
@@ -92,7 +92,7 @@ class Sampler:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
     parser.add_argument('--evaluators', type=int, default=32)
-    parser.add_argument('--popsize', type=int, default=64)
+    parser.add_argument('--population', type=int, default=64)
     parser.add_argument('--iterations', type=int, default=3)
     parser.add_argument('--world-states', type=int, default=1)
     parser.add_argument('--port', type=int, default=0,
@@ -105,8 +105,8 @@ def main():
         port = arguments.port or 11811 + domain
         command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
                    '--evaluators', str(arguments.evaluators), '--bag', str(bag),
-                   '--iterations', str(arguments.iterations), '--popsize',
-                   str(arguments.popsize), '--world-states', str(arguments.world_states),
+                   '--iterations', str(arguments.iterations), '--population',
+                   str(arguments.population), '--world-states', str(arguments.world_states),
                    '--seed', '1', '--discovery-server', str(port), '--domain-id', str(domain)]
         started = time.monotonic()
         runner = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
@@ -134,7 +134,7 @@ def main():
 def report(arguments, bag, sampler, wall):
     result = json.loads((bag / 'result.json').read_text())
     record = read_run(bag, run_id=result['run_id'])
-    candidates = arguments.popsize * arguments.iterations
+    candidates = arguments.population * arguments.iterations
     published = result['published']
     ok = record.evaluations.select(record.evaluations['status'] == 0)
     answered = len(set(ok['candidate_id']))
@@ -158,7 +158,7 @@ def report(arguments, bag, sampler, wall):
     per_evaluation = sampler.running('evaluator') / max(1, evaluations)
     size = sum(path.stat().st_size for path in bag.glob('*.mcap'))
     print(f'{arguments.evaluators} evaluators, {candidates} candidates '
-          f'({arguments.iterations} x {arguments.popsize}, {arguments.world_states} worlds), '
+          f'({arguments.iterations} x {arguments.population}, {arguments.world_states} worlds), '
           f'wall {wall:.1f} s')
     for name, value in checks.items():
         print(f'  check: {name}: {value}')

@@ -76,7 +76,7 @@ def time_to_first_candidate(folder, index):
     bag = pathlib.Path(folder) / f'start-{index}'
     command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK_FILE),
                '--evaluators', '2', '--bag', str(bag), '--quiet', '--iterations', '1',
-               '--popsize', '4', '--world-states', '1', '--seed', '1', '--domain-id', 'auto']
+               '--population', '4', '--world-states', '1', '--seed', '1', '--domain-id', 'auto']
     launched = time.time()
     subprocess.run(command, check=True, cwd=ROOT, stdout=subprocess.DEVNULL, env=environment())
     record = read_run(bag)

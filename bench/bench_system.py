@@ -27,7 +27,7 @@ generations cost more: every candidate pays a fixed cost besides stepping (build
 each world's object, the objectives: about a tenth of the bare loop's time), and at the end
 of each generation one evaluator waits for the other's last candidate.
 
-Usage: python bench/bench_system.py [--iterations 2] [--popsize 80] [--world-states 64]
+Usage: python bench/bench_system.py [--iterations 2] [--population 80] [--world-states 64]
                                     [--audit-fraction F]
 """
 
@@ -81,7 +81,8 @@ def system_rate(evaluators, arguments, folder):
     bag = pathlib.Path(folder) / f'evaluators-{evaluators}'
     command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK_FILE),
                '--evaluators', str(evaluators), '--bag', str(bag), '--quiet',
-               '--iterations', str(arguments.iterations), '--popsize', str(arguments.popsize),
+               '--iterations', str(arguments.iterations),
+               '--population', str(arguments.population),
                '--world-states', str(arguments.world_states), '--seed', '1',
                '--domain-id', 'auto']
     if arguments.audit_fraction is not None:
@@ -97,7 +98,7 @@ def system_rate(evaluators, arguments, folder):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument('--iterations', type=int, default=2)
-    parser.add_argument('--popsize', type=int, default=80)
+    parser.add_argument('--population', type=int, default=80)
     parser.add_argument('--world-states', type=int, default=64)
     parser.add_argument('--audit-fraction', type=float, help="default: hand-codesign run's")
     arguments = parser.parse_args()
@@ -107,7 +108,7 @@ def main():
         bag, two, audits = system_rate(2, arguments, folder)
         raw = raw_rate(task, bag, 24)
         raw_two = raw_rates_at_once(task, bag, 24)
-    print(f'Task 5, {arguments.iterations} generations x {arguments.popsize} candidates x '
+    print(f'Task 5, {arguments.iterations} generations x {arguments.population} candidates x '
           f'{arguments.world_states} worlds ({time.strftime("%H:%M:%S")}, load average '
           f'{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)')
     print(f'  raw single-core stepping (bench_core bare loop)  {raw:9.0f} steps/s')
@@ -115,7 +116,7 @@ def main():
     print(f'  system, 1 evaluator                               {one:9.0f} steps/s')
     print(f'  system, 2 evaluators                              {two:9.0f} steps/s '
           f'({audits} audit evaluations not counted)')
-    target = 0.95 if arguments.popsize * arguments.world_states >= 80 * 64 else 0.90
+    target = 0.95 if arguments.population * arguments.world_states >= 80 * 64 else 0.90
     print(f'  2 evaluators / (2 x raw)   {two / (2 * raw):.3f}   (target >= {target:.2f})')
     print(f'  2 evaluators / (2 raw at once) {two / raw_two:.3f}   (ceiling of two processes: 1)')
     print(f'  2 evaluators / 1 evaluator {two / one:.3f}   (target >= 1.8)')

@@ -129,7 +129,7 @@ def timed_run(task, arguments, engine, seed, bag):
     command = [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(task),
                '--evaluators', str(arguments.evaluators), '--bag', str(bag),
                '--seed', str(seed), '--iterations', str(arguments.generations or iterations),
-               '--popsize', str(population), '--world-states', str(worlds),
+               '--population', str(population), '--world-states', str(worlds),
                '--engine', engine, '--domain-id', 'auto', '--quiet']
     load = os.getloadavg()[0]
     started = time.perf_counter()

@@ -9,6 +9,7 @@ import argparse
 import importlib
 import sys
 
+from hand_codesign.deprecation import show_old_names, warn_old_name
 from hand_codesign.errors import closed_stdout_status, UserError
 from hand_codesign.version import version_text
 
@@ -37,6 +38,24 @@ VERBS = {
     'transfer': ('hand_codesign.analysis.transfer', 'transfer_command',
                  'tabulate designs measured in both physics engines (analyze --unseen)'),
 }
+# verb -> an example of it, shown at the end of its --help (test_cli parses each)
+EXAMPLES = {
+    'check': 'hand-codesign check config/tasks/task5.yaml --population 16',
+    'run': 'hand-codesign run --task config/tasks/task5.yaml --evaluators 2 --bag bags/my-run \\\n'
+           '      --seed 1 --iterations 30 --population 16 --world-states 16',
+    'analyze': 'hand-codesign analyze bags/my-run --unseen 1000 --format svg',
+    'replay': 'hand-codesign replay bags/my-run --gif bags/my-run.gif',
+    'robustness': 'hand-codesign robustness bags/my-run --samples 729',
+    'export': 'hand-codesign export bags/my-run --out bags/my-run-hand',
+    'evaluate': 'hand-codesign evaluate bags/my-run --rig sim --top 3',
+    'recover': 'hand-codesign recover bags/my-run',
+    'reproduce': 'hand-codesign reproduce task5-joint-limits --budget smoke --seeds 2',
+    'offsets': 'hand-codesign offsets bags/my-run --unseen 1000 --table bags/my-run-offsets',
+    'transfer': "hand-codesign transfer docs/results/task5-transfer --title 'Task 5 in both "
+                "engines'",
+}
+DOMAIN_HELP = ("ROS_DOMAIN_ID (default: the environment's, as ROS 2 tools; 0 if unset); auto: "
+               'a free one of this host')
 DEFAULT_PORT = 11811   # Fast DDS's own default for a discovery server
 MAX_DOMAIN_ID = 232    # ros.runner's; not imported from there, so that --help needs no ROS
 
@@ -61,46 +80,85 @@ def seconds_option(text):
     return seconds
 
 
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Help that shows each option's default, unless its text already says it."""
+
+    def _get_help_string(self, action):
+        text = action.help or ''
+        if ('default' in text or not action.option_strings or action.required
+                or any(action.default is nothing for nothing in (None, False, argparse.SUPPRESS))
+                or action.default == []):
+            return text
+        return f'{text} (default %(default)s)'
+
+
+class OldOption(argparse.Action):
+    """An option's old name (hand_codesign.deprecation): read as the new one, with a line."""
+
+    def __init__(self, option_strings, dest, new, **keywords):
+        super().__init__(option_strings, dest, help=argparse.SUPPRESS, **keywords)
+        self.new = new
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        warn_old_name(option_string, self.new)
+        setattr(namespace, self.dest, values)
+
+
+def add_budget_arguments(parser):
+    """Add the seed and budget options `run` and `check` share."""
+    parser.add_argument('--seed', type=int, help="run seed (default: the task file's)")
+    parser.add_argument('--iterations', type=int,
+                        help="generations per structure (default: the task file's "
+                             'optimizer.iterations)')
+    parser.add_argument('--population', type=int,
+                        help="candidates per generation (default: the task file's "
+                             'optimizer.population)')
+    parser.add_argument('--popsize', dest='population', type=int, action=OldOption,
+                        new='--population')
+    parser.add_argument('--world-states', type=int,
+                        help="randomized worlds per candidate (default: the task file's "
+                             'world_states)')
+
+
 def add_run_arguments(parser):
-    parser.add_argument('--task', help='task file (YAML), e.g. config/tasks/task5.yaml')
+    parser.add_argument('--task', help='task file (YAML), e.g. config/tasks/task5.yaml '
+                                       '(required unless --resume; no default)')
     parser.add_argument('--evaluators', type=int, default=2,
                         help='evaluator processes to start (default 2; 0: wait for '
                              'evaluators started elsewhere)')
-    parser.add_argument('--bag', help='where to write the bag (a new folder)')
-    parser.add_argument('--seed', type=int, help="run seed (default: the task file's)")
-    parser.add_argument('--iterations', type=int, help='generations per structure')
-    parser.add_argument('--popsize', type=int, help='candidates per generation')
-    parser.add_argument('--world-states', type=int, help='randomized worlds per candidate')
+    parser.add_argument('--bag', help='where to write the bag, a new folder (default '
+                                      'bags/<task>-<date>-<time>)')
+    add_budget_arguments(parser)
     parser.add_argument('--engine', choices=('pybullet', 'mujoco'),
                         help="physics engine (default: the task file's physics.engine)")
     parser.add_argument('--resume', metavar='BAG',
                         help='continue the run recorded in BAG (with --iterations N: a '
-                             'finished one, on to N generations)')
+                             'finished one, on to N generations; default: a new run)')
     parser.add_argument('--domain-id', type=domain_id_option, metavar='ID|auto',
-                        help="ROS_DOMAIN_ID of the run (default: the environment's, as ROS 2 "
-                             'tools; 0 if unset); auto: a free one of this host')
+                        help=DOMAIN_HELP)
     parser.add_argument('--quiet', action='store_true', help='print only the final summary')
     parser.add_argument('--progress-every', type=seconds_option, metavar='SECONDS',
                         help="with --quiet, still print a generation's progress line, at most "
-                             'one every SECONDS (reproduce: 300)')
+                             'one every SECONDS (default: none; reproduce: 300)')
     parser.add_argument('--discovery-server', type=int, nargs='?', const=DEFAULT_PORT,
                         metavar='PORT',
                         help='start a Fast DDS discovery server (UDP port, default '
                              f'{DEFAULT_PORT}) for evaluators on hosts without multicast; '
-                             'prints how they join')
+                             'prints how they join (default: none, multicast discovery)')
     parser.add_argument('--start-timeout', type=seconds_option, metavar='SECONDS',
                         help='seconds the evaluators have to join before the run gives up '
                              '(default 300 with --evaluators N > 0; 0: wait without limit, '
                              'the default with --evaluators 0)')
     parser.add_argument('--live', type=int, nargs='?', const=8765, metavar='PORT',
-                        help='serve the run live to Foxglove over WebSocket (default port '
-                             '8765; 0: any free port)')
+                        help='serve the run live to Foxglove over WebSocket (default: no live '
+                             'view; PORT default 8765; 0: any free port)')
     parser.add_argument('--live-host', default='127.0.0.1', metavar='HOST',
                         help='address the live view serves on (default 127.0.0.1: this host '
                              'only)')
     parser.add_argument('--write-key-file', action='append', default=[], metavar='ID=PATH',
                         help='write the key of evaluator ID to PATH (mode 0600, outside the bag) '
-                             'for an evaluator on another host: -p key_file:=PATH')
+                             'for an evaluator on another host: -p key_file:=PATH (default: '
+                             'none)')
     parser.add_argument('--audit-fraction', type=float,
                         help='share of answers a second evaluator checks (default 0.1; 0: none)')
     add_rig_arguments(parser)
@@ -109,7 +167,8 @@ def add_run_arguments(parser):
 def add_rig_arguments(parser):
     parser.add_argument('--rig', choices=('hardware', 'sim'), default='',
                         help='also start a rig evaluator: "hardware" for a test rig that joins '
-                             'the ROS domain, "sim" with a simulated rig (docs/RIG.md)')
+                             'the ROS domain, "sim" with a simulated rig (docs/RIG.md; default: '
+                             'none)')
     parser.add_argument('--rig-rate', type=float, default=0.0,
                         help='--rig sim: poses per second (default 0: every physics step)')
     parser.add_argument('--rig-phase', type=float, default=0.0,
@@ -122,10 +181,7 @@ def add_check_arguments(parser):
     parser.add_argument('task', help='task file (YAML), e.g. config/tasks/task5.yaml')
     parser.add_argument('--json', action='store_true',
                         help='print one JSON object (floats exact) instead of the text')
-    parser.add_argument('--seed', type=int, help="run seed (default: the task file's)")
-    parser.add_argument('--iterations', type=int, help='generations per structure')
-    parser.add_argument('--popsize', type=int, help='candidates per generation')
-    parser.add_argument('--world-states', type=int, help='randomized worlds per candidate')
+    add_budget_arguments(parser)
 
 
 def add_reproduce_arguments(parser):
@@ -145,7 +201,8 @@ def add_reproduce_arguments(parser):
                                       'give the same folder again to continue')
     parser.add_argument('--only', nargs='+', metavar='CONFIGURATION',
                         help="run only these of the experiment's configurations (the first "
-                             'column of its table); the tables show every one measured')
+                             'column of its table; default: all); the tables show every one '
+                             'measured')
     parser.add_argument('--format', choices=('png', 'svg', 'pdf'), default='png',
                         help='file format of the figures (default png)')
     read_back = parser.add_mutually_exclusive_group()
@@ -167,20 +224,22 @@ def add_reproduce_arguments(parser):
 
 def add_offsets_arguments(parser):
     parser.add_argument('bags', nargs='+', metavar='BAG', help='bags of finished runs')
-    parser.add_argument('--unseen', type=int, default=1000, help='unseen worlds (1000)')
+    parser.add_argument('--unseen', type=int, default=1000, help='unseen worlds')
     parser.add_argument('--training', action='store_true',
                         help="also measure on the run's own training worlds")
-    parser.add_argument('--table', metavar='OUT', help='write OUT.csv and OUT.md')
+    parser.add_argument('--table', metavar='OUT',
+                        help='write OUT.csv and OUT.md (default: print the table only)')
 
 
 def add_transfer_arguments(parser):
     parser.add_argument('folder', help='folder of RUN-in-pybullet.json and RUN-in-mujoco.json, '
                                        'written by `analyze BAG --unseen N --engine ENGINE`')
     parser.add_argument('--title', required=True, help="the table's title")
-    parser.add_argument('--note', default='', help='a paragraph under the title')
+    parser.add_argument('--note', default='',
+                        help='a paragraph under the title (default: none)')
     parser.add_argument('--measures', nargs='*', default=[], metavar='DIR',
                         help="a reproduce campaign's measures/ folder, for runs measured in "
-                             'MuJoCo only')
+                             'MuJoCo only (default: none)')
 
 
 def add_bag_arguments(verb, parser):
@@ -193,16 +252,20 @@ def add_bag_arguments(verb, parser):
         parser.add_argument('--engine', choices=('pybullet', 'mujoco'),
                             help='with --unseen: the physics engine to measure in '
                                  "(default: the run's)")
+        parser.add_argument('--format', choices=('png', 'svg', 'pdf'), default='png',
+                            help='file format of the figures (default png)')
     elif verb == 'replay':
-        parser.add_argument('--generation', type=int, help='generation (default: the best)')
+        parser.add_argument('--generation', type=int,
+                            help="generation (default: the run's best design's)")
         parser.add_argument('--rank', type=int, default=0,
                             help='rank within the generation, 0 = best')
         parser.add_argument('--world', type=int, default=0, help='world state to replay')
         output = parser.add_mutually_exclusive_group()
-        output.add_argument('--gif', help='write an animated GIF of the motion')
+        output.add_argument('--gif', help='write an animated GIF of the motion (default: none)')
         output.add_argument('--gui', action='store_true', help='open the PyBullet window')
         output.add_argument('--mcap', metavar='FILE',
-                            help='write the rollout as a ROS 2 MCAP of markers (Foxglove)')
+                            help='write the rollout as a ROS 2 MCAP of markers (Foxglove; '
+                                 'default: none)')
     elif verb == 'robustness':
         parser.add_argument('--samples', type=int, default=15625,
                             help='world states (default 15625 = 5 values on 6 quantities)')
@@ -212,7 +275,7 @@ def add_bag_arguments(verb, parser):
         parser.add_argument('--out', required=True, help='folder for the URDF and YAML')
         parser.add_argument('--candidate', type=int, metavar='ID',
                             help="a recorded candidate's id instead of the best design, e.g. "
-                                 'an elite of the archive `analyze` lists')
+                                 'an elite of the archive `analyze` lists (default: the best)')
     elif verb == 'evaluate':
         parser.add_argument('--top', type=int, default=3,
                             help='how many of the best designs (default 3)')
@@ -220,7 +283,7 @@ def add_bag_arguments(verb, parser):
         parser.add_argument('--timeout', type=float, default=3600.0,
                             help='seconds to wait for every answer (default 3600)')
         parser.add_argument('--domain-id', type=domain_id_option, metavar='ID|auto',
-                            help='ROS_DOMAIN_ID (default auto: a free one of this host)')
+                            help=DOMAIN_HELP)
         add_rig_arguments(parser)
 
 
@@ -243,7 +306,9 @@ def build_parser():
     parser.add_argument('--version', action=VersionAction)
     verbs = parser.add_subparsers(dest='verb', metavar='VERB', required=True)
     for verb, (_, _, help_text) in VERBS.items():
-        verb_parser = verbs.add_parser(verb, help=help_text, description=help_text)
+        verb_parser = verbs.add_parser(verb, help=help_text, description=help_text,
+                                       formatter_class=HelpFormatter,
+                                       epilog=f'example:\n  {EXAMPLES[verb]}')
         if verb == 'run':
             add_run_arguments(verb_parser)
         elif verb == 'check':
@@ -272,6 +337,7 @@ def load_verb(verb):
 
 
 def main(argv=None):
+    show_old_names(lambda text: print(f'hand-codesign: {text}', file=sys.stderr))
     arguments = build_parser().parse_args(argv)
     try:
         command = load_verb(arguments.verb)

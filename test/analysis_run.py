@@ -23,7 +23,7 @@ from rclpy.serialization import serialize_message
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK = ROOT / 'config' / 'tasks' / 'task5.yaml'
-BUDGET = ['--iterations', '4', '--popsize', '6', '--world-states', '2', '--seed', '3']
+BUDGET = ['--iterations', '4', '--population', '6', '--world-states', '2', '--seed', '3']
 # what the `hand-codesign` console script runs
 CLI = [sys.executable, '-c', 'import sys; from hand_codesign.cli import main; sys.exit(main())']
 

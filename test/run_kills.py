@@ -22,7 +22,7 @@ import psutil
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK = ROOT / 'config' / 'tasks' / 'task5.yaml'
 # long enough to be killed mid-run: about 40 generations per 10 s on 2 cores
-BUDGET = ['--iterations', '400', '--popsize', '6', '--world-states', '2', '--seed', '3']
+BUDGET = ['--iterations', '400', '--population', '6', '--world-states', '2', '--seed', '3']
 POLL = 0.02
 
 

@@ -1,9 +1,15 @@
 """A campaign's figures: median and interquartile band across seeds, any of three formats."""
 
+import types
+
 from hand_codesign import cli
 from hand_codesign.campaign import figures
+import matplotlib
 import numpy as np
+from PIL import Image
 import pytest
+
+THIRTY = [f'configuration-{index:02d}-named-in-full' for index in range(30)]
 
 
 def test_the_band_is_the_seeds_percentiles_of_their_best_so_far():
@@ -36,3 +42,40 @@ def test_reproduce_takes_the_figure_format():
     assert parser.parse_args(['reproduce', 'task5-joint-limits']).format == 'png'
     with pytest.raises(SystemExit):
         parser.parse_args(['reproduce', 'task5-joint-limits', '--format', 'tiff'])
+
+
+def thirty_panels():
+    generator = np.random.default_rng(0)
+    return [(label, [(seed, (np.arange(1, 21) * 16.0, np.minimum.accumulate(
+        generator.uniform(0.1, 2.0, 20)))) for seed in (1, 2, 3)]) for label in THIRTY]
+
+
+def thirty_groups():
+    generator = np.random.default_rng(1)
+    return [(label, [{'worlds': {'initial_errors': {'position': generator.uniform(0, .02, 50)},
+                                 'errors': {'position': generator.uniform(0, .01, 50)}}}])
+            for label in THIRTY]
+
+
+TOLERANCE = types.SimpleNamespace(kind='position', limit=0.005, describe=lambda: '5 mm')
+
+
+@pytest.mark.parametrize('figure', ['convergence', 'errors'])
+def test_thirty_configurations_stay_legible(tmp_path, figure):
+    """Every name written once, in a page-sized figure, not a strip thousands of pixels wide."""
+    draw = {'convergence': lambda path: figures.plot_convergence(path, thirty_panels(), 't'),
+            'errors': lambda path: figures.plot_errors(path, thirty_groups(), TOLERANCE, 't')}
+    draw[figure](tmp_path / 'figure.png')
+    width, height = Image.open(tmp_path / 'figure.png').size
+    assert width <= 1600 and height <= 1600 and width / height < 3
+    with matplotlib.rc_context({'svg.fonttype': 'none'}):   # text as text, to be read
+        draw[figure](tmp_path / 'figure.svg')
+    text = (tmp_path / 'figure.svg').read_text()
+    assert all(text.count(f'>{label}<') == 1 for label in THIRTY)
+
+
+def test_up_to_ten_configurations_share_one_axis_in_ten_colours(tmp_path):
+    with matplotlib.rc_context({'svg.fonttype': 'none'}):
+        figures.plot_convergence(tmp_path / 'ten.svg', thirty_panels()[:10], 't')
+    text = (tmp_path / 'ten.svg').read_text()
+    assert all(f'{label}: median of 3 seeds' in text for label in THIRTY[:10])

@@ -133,7 +133,7 @@ def test_hierarchy_lists_its_structures_and_their_budget(capsys):
 
 def test_overrides_and_early_termination_are_shown(capsys):
     assert main(['check', str(TASKS / 'task3.yaml'), '--seed', '4', '--iterations', '3',
-                 '--popsize', '6', '--world-states', '2']) == 0
+                 '--population', '6', '--world-states', '2']) == 0
     text = ' '.join(capsys.readouterr().out.split())  # unwrapped
     assert 'budget: mocma, 3 iterations x 6 candidates, 2 world states, seed 4' in text
     assert 'early termination can shorten a rollout' in text
@@ -153,12 +153,12 @@ def test_the_world_scoring_is_shown(capsys, tmp_path):
                           'final_check': 3}
     path = tmp_path / 'robust.yaml'
     path.write_text(yaml.safe_dump(document))
-    assert main(['check', str(path), '--iterations', '4', '--popsize', '6']) == 0
+    assert main(['check', str(path), '--iterations', '4', '--population', '6']) == 0
     text = ' '.join(capsys.readouterr().out.split())
     assert ('each objective is the mean over its worst 0.25 of the worlds (CVaR, '
             'worlds.aggregate: worst); each generation meets a fresh draw') in text
     assert 'of the best designs of the last 3 generations' in text
-    summary = checked(capsys, str(path), '--iterations', '4', '--popsize', '6')
+    summary = checked(capsys, str(path), '--iterations', '4', '--population', '6')
     assert summary['world_scoring'] == {'aggregate': 'worst', 'fraction': 0.25,
                                         'resample': 'generation', 'final_check': 3,
                                         'racing': None}
@@ -218,8 +218,8 @@ def test_a_hierarchy_that_cannot_reach_its_stop_is_refused(tmp_path, capsys):
 
 
 def test_bad_override(capsys):
-    assert main(['check', str(TASKS / 'task5.yaml'), '--popsize', '0']) == 2
-    assert '--popsize: expected a positive number, got 0' in capsys.readouterr().err
+    assert main(['check', str(TASKS / 'task5.yaml'), '--population', '0']) == 2
+    assert '--population: expected a positive number, got 0' in capsys.readouterr().err
 
 
 def test_json_floats_are_exact(capsys):

@@ -40,11 +40,11 @@ def test_every_verb_loads_its_command():
 @pytest.mark.parametrize('flags, message', [
     ([], '--task FILE is required'),
     (['--task', TASK, '--evaluators', '-1'], '--evaluators: expected 0 or more, got -1'),
-    (['--task', TASK, '--popsize', '0'], '--popsize: expected a positive number, got 0'),
+    (['--task', TASK, '--population', '0'], '--population: expected a positive number, got 0'),
     (['--task', TASK, '--world-states', '-2'], '--world-states: expected a positive number'),
     (['--task', 'no/such/task.yaml'], 'no/such/task.yaml'),
-    (['--resume', 'some-bag', '--seed', '3', '--popsize', '4'],
-     '--resume takes the task, seed and budget from the bag; drop --seed, --popsize'),
+    (['--resume', 'some-bag', '--seed', '3', '--population', '4'],
+     '--resume takes the task, seed and budget from the bag; drop --seed, --population'),
 ])
 def test_bad_run_flags_are_one_line_errors(capsys, flags, message):
     code, out, err = run(capsys, 'run', *flags)

@@ -75,6 +75,8 @@ def test_package_share_holds_manifest_and_configs(workspace):
     assert (share / 'package.xml').is_file()
     marker = 'share/ament_index/resource_index/packages/hand_codesign'
     assert (workspace / 'hand_codesign' / marker).is_file()
+    assert (share / 'config' / 'foxglove_layout.json').read_bytes() == (
+        ROOT / 'config' / 'foxglove_layout.json').read_bytes()
     configs = {p.name for p in (ROOT / 'config' / 'tasks').glob('*.yaml')}
     assert configs and configs == {p.name for p in (share / 'config' / 'tasks').glob('*.yaml')}
 

@@ -177,7 +177,7 @@ def test_task2_follows_the_growing_horizon_to_a_better_whole_rollout():
 def test_a_horizon_run_is_recorded_replayed_and_resumed(tmp_path, capsys):
     bag = tmp_path / 'task3_run'
     process = run_cli('run', '--task', TASKS / 'task3.yaml', '--evaluators', '2', '--bag', bag,
-                      '--iterations', '4', '--popsize', '6', '--world-states', '2',
+                      '--iterations', '4', '--population', '6', '--world-states', '2',
                       '--seed', '2', '--quiet', '--domain-id', 'auto')
     assert process.returncode == 0, process.stdout + process.stderr
     mcap = next(bag.glob('*.mcap'))

@@ -20,7 +20,7 @@ MUJOCO = ['--engine', 'mujoco']
 # enough generations that an evaluator killed after the first still had work (a MuJoCo
 # evaluation of 4 worlds takes about 15 ms)
 GENERATIONS = 12
-BUDGET = ['--iterations', str(GENERATIONS), '--popsize', '6', '--world-states', '4',
+BUDGET = ['--iterations', str(GENERATIONS), '--population', '6', '--world-states', '4',
           '--seed', '7']
 
 

@@ -63,7 +63,7 @@ def test_an_evaluator_by_hand_gives_up_a_run_whose_optimizer_left(tmp_path):
     run = subprocess.Popen(
         [sys.executable, '-m', 'hand_codesign.cli', 'run', '--task', str(TASK),
          '--evaluators', '0', '--domain-id', str(domain), '--bag', str(tmp_path / 'run'),
-         '--write-key-file', f'by-hand={key}', '--iterations', '1', '--popsize', '2',
+         '--write-key-file', f'by-hand={key}', '--iterations', '1', '--population', '2',
          '--world-states', '1', '--quiet'],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     evaluator = None

@@ -4,7 +4,7 @@ package.xml declares every third-party module the package imports, so that rosde
 On the colcon path `rosdep install` reads package.xml; a module the code imports but the file
 does not declare is missing at the first run. ROS packages are declared by name, Python
 packages by rosdep key (python3-<name>, python3-<name>-pip or python-<name>-pip, as rosdistro
-names them), and the PyPI packages without a key in the `pip only:` comment, which the README's
+names them), and the PyPI packages in the `pip only:` comment, which the README's
 pip line installs.
 """
 
@@ -59,11 +59,3 @@ def test_every_imported_module_is_declared():
     missing = {module: str(path) for module, path in imported_top_modules().items()
                if not accepted_names(module) & (keys | set(pip_only))}
     assert not missing, f'imported but not declared in package.xml: {missing}'
-
-
-def test_the_readmes_pip_line_installs_the_pip_only_packages_as_pinned():
-    _, pip_only = declarations()
-    pins = dict(re.findall(r'^([A-Za-z0-9_.-]+)==(\S+)', (ROOT / 'requirements.txt').read_text(),
-                           re.M))
-    line = f'pip install {" ".join(f"{name}=={pins[name]}" for name in pip_only)}'
-    assert line in (ROOT / 'README.md').read_text()

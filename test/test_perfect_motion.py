@@ -39,7 +39,7 @@ def turned_about(path, axis):
     low, high = orientation['range']
     orientation['axis'] = AXES[axis]
     orientation['range'] = [low, high] if low != high else [-0.4, 0.4]
-    document['num_world_states'] = WORLDS
+    document['world_states'] = WORLDS
     return parse_task(yaml.safe_dump(document), source=f'{path.name} about {axis}')
 
 

@@ -41,7 +41,7 @@ def plain_bag(tmp_path_factory):
     """Return the bag folder of a tiny run made from a plain shell."""
     bag = tmp_path_factory.mktemp('plain') / 'run'
     plain('run', '--task', TASK, '--evaluators', 2, '--bag', bag, '--iterations', 2,
-          '--popsize', 4, '--world-states', 2, '--seed', 3, '--quiet')
+          '--population', 4, '--world-states', 2, '--seed', 3, '--quiet')
     assert json.loads((bag / 'result.json').read_text())['evaluations'] == 8
     return bag
 

@@ -1,5 +1,6 @@
 """CMA-MAE and CMA-ME: the archive, its descriptors, state, replay, task keys, a real run."""
 
+import importlib.util
 import json
 import math
 import os
@@ -295,7 +296,7 @@ def test_a_bad_archive_key_is_one_line_naming_file_and_key(algorithm, archive, e
     assert f'{path}: {expected}' in err
 
 
-BUDGET = ['--iterations', '3', '--popsize', '8', '--world-states', '2', '--seed', '3']
+BUDGET = ['--iterations', '3', '--population', '8', '--world-states', '2', '--seed', '3']
 
 
 @pytest.fixture(scope='module')
@@ -439,3 +440,14 @@ def test_analyze_draws_an_archive_over_an_outcome(outcome_run, tmp_path, capsys)
                        'limit_rest,fitness')
     assert len(rows) - 1 == len(archive_elites(bag))
     assert (out / 'archive.png').read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+
+
+def test_without_pyribs_quality_diversity_is_refused_in_one_line(monkeypatch):
+    found = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, 'find_spec',
+                        lambda name, *rest: None if name == 'ribs' else found(name, *rest))
+    with pytest.raises(OptimizerError) as raised:
+        CmaMae(4, [1.0], 8, 3, seed=1)
+    assert str(raised.value) == ('cma-mae needs pyribs, which is not installed: pip install '
+                                 'ribs (pinned in requirements.txt, and in requirements-apt.txt '
+                                 'for the apt path)')

@@ -14,7 +14,7 @@ import numpy as np
 import yaml
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-BUDGET = ['--iterations', '2', '--popsize', '8', '--world-states', '4', '--seed', '7']
+BUDGET = ['--iterations', '2', '--population', '8', '--world-states', '4', '--seed', '7']
 # a band this narrow (10 micrometres) is no sensible statement about Task 5's worlds: it only
 # makes the race stop candidates of a run this small, whose designs score within 0.1 mm
 RACING = {'rounds': 2, 'range': 0.00001}

@@ -135,7 +135,7 @@ def test_resume_and_replay_rebuild_the_resampled_run_and_its_check(task_file):
 
 def real_run(bag, evaluators, task_file):
     command = CLI + ['run', '--task', str(task_file), '--evaluators', str(evaluators),
-                     '--bag', str(bag), '--iterations', '3', '--popsize', '4',
+                     '--bag', str(bag), '--iterations', '3', '--population', '4',
                      '--world-states', '2', '--seed', '4', '--domain-id', 'auto']
     process = subprocess.run(command, cwd=ROOT, stdout=subprocess.PIPE,
                              stderr=subprocess.STDOUT, text=True, timeout=300)

@@ -258,7 +258,7 @@ def test_a_restart_run_of_a_task_resumes_from_its_record():
     assert point.search.best[0].candidate_id == search.best[0].candidate_id
 
 
-BUDGET = ['--iterations', '4', '--popsize', '4', '--world-states', '2', '--seed', '3']
+BUDGET = ['--iterations', '4', '--population', '4', '--world-states', '2', '--seed', '3']
 
 
 @pytest.fixture(scope='module')

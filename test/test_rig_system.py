@@ -25,7 +25,7 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK = ROOT / 'config' / 'tasks' / 'task1.yaml'
-BUDGET = ['--iterations', '2', '--popsize', '4', '--world-states', '2', '--seed', '7']
+BUDGET = ['--iterations', '2', '--population', '4', '--world-states', '2', '--seed', '7']
 
 
 def command(*arguments, timeout=300):
@@ -47,7 +47,7 @@ def rig_run(tmp_path_factory):
 def reevaluation(rig_run):
     out = rig_run.parent / 'reevaluated'
     code, output = command('evaluate', rig_run, '--rig', 'sim', '--rig-rate', 100,
-                           '--rig-phase', 0.5, '--top', 2, '--out', out)
+                           '--rig-phase', 0.5, '--top', 2, '--out', out, '--domain-id', 'auto')
     assert code == 0, output
     return out, output
 

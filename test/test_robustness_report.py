@@ -78,7 +78,7 @@ def test_fig3_per_structure_of_a_hierarchy_run(tmp_path, capsys):
     task_file = tmp_path / 'task4_small.yaml'
     task_file.write_text(text)
     bag = tmp_path / 'hierarchy'
-    run_codesign(bag, ['--iterations', '1', '--popsize', '4', '--world-states', '2',
+    run_codesign(bag, ['--iterations', '1', '--population', '4', '--world-states', '2',
                        '--seed', '1'], task=task_file)
     record = read_run(bag)
     bests = structure_bests(record)

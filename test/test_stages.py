@@ -125,7 +125,7 @@ def test_a_real_two_stage_run_is_recorded_replayed_and_analyzed(tmp_path):
     task_file = TASKS / 'task1.yaml'
     assert load_run_task(task_file).two_stage  # the paper's two stages
     bag = tmp_path / 'two_stage'
-    output = run_codesign(bag, ['--iterations', '2', '--popsize', '4', '--world-states', '2',
+    output = run_codesign(bag, ['--iterations', '2', '--population', '4', '--world-states', '2',
                                 '--seed', '2'], task=task_file)
     assert 'generation 2/2 of stage 1' in output and 'generation 2/2 of stage 2' in output
     record = read_run(bag)

@@ -33,7 +33,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 TASK = ROOT / 'config' / 'tasks' / 'task5.yaml'
 # for a process that starts before a run: it announces itself often (the file says why)
 ANNOUNCE_OFTEN = ROOT / 'test' / 'announce_long.xml'
-BUDGET = ['--iterations', '3', '--popsize', '6', '--world-states', '3', '--seed', '7']
+BUDGET = ['--iterations', '3', '--population', '6', '--world-states', '3', '--seed', '7']
 SUMMARY_FIELDS = ['generation', 'best', 'median', 'worst', 'pareto_front',
                   'best_candidate_id', 'best_objectives', 'best_fitness', 'best_genome',
                   'evaluations', 'final']
@@ -340,7 +340,7 @@ def test_an_evaluator_with_its_key_that_lies_is_caught(one_evaluator_run, tmp_pa
 def test_hierarchy_task_searches_structures_bottom_up(tmp_path):
     bag = tmp_path / 'hierarchy'
     output = finish(start_run(bag, 2, budget=[
-        '--iterations', '1', '--popsize', '4', '--world-states', '2', '--seed', '3'],
+        '--iterations', '1', '--population', '4', '--world-states', '2', '--seed', '3'],
         task=ROOT / 'config' / 'tasks' / 'task4.yaml'))
     summaries_table = read_run(bag).generation_summaries
     checks = summaries_table.select(summaries_table['check'])
@@ -354,7 +354,7 @@ def test_hierarchy_task_searches_structures_bottom_up(tmp_path):
 
 def test_terminated_run_stops_every_process_and_closes_its_bag(tmp_path):
     bag = tmp_path / 'terminated'
-    process = start_run(bag, 2, budget=['--iterations', '50', '--popsize', '6',
+    process = start_run(bag, 2, budget=['--iterations', '50', '--population', '6',
                                         '--world-states', '3'])
     lines = []
     threading.Thread(target=lambda: lines.extend(process.stdout), daemon=True).start()
@@ -436,7 +436,7 @@ def nodes_by_hand(tmp_path, env):
 def test_evaluator_keeps_its_heartbeat_while_it_evaluates(tmp_path):
     # candidates of 500 worlds take seconds; the heartbeat period is 0.5 s
     bag = tmp_path / 'long'
-    finish(start_run(bag, 1, budget=['--iterations', '1', '--popsize', '3',
+    finish(start_run(bag, 1, budget=['--iterations', '1', '--population', '3',
                                      '--world-states', '500', '--seed', '7']))
     record = read_run(bag)
     assert np.max(record.evaluations['wall_time']) > 1.5

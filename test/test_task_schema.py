@@ -8,13 +8,15 @@ namesake in config/tasks/.
 import dataclasses
 import pathlib
 import re
+import warnings
 
 from hand_codesign.core.task import load_task
-from hand_codesign.core.task.document import with_keys
+from hand_codesign.core.task.document import keys_table, with_keys
 from hand_codesign.core.task.parts import TaskError, WorldsSpec
 from hand_codesign.core.task.schema import entries, key, rows, settings
 from hand_codesign.core.task.spec import Task
 from hand_codesign.core.task.values import ValueReader
+from hand_codesign.deprecation import OldName
 import pytest
 import yaml
 
@@ -52,6 +54,31 @@ def test_a_new_key_is_one_field():
                                         r'integer, got 0'):
         reader.section(Worlds, {'repeats': 0}, 'worlds')
     assert 'repeats' in [entry.field for entry in entries(Worlds)]
+
+
+def test_a_renamed_key_is_read_under_its_old_name_with_one_line():
+    # the old name is declared on the key: the reader takes it, says so once, and the docs
+    # name it; a recorded task (warn_old_names False) reads silently
+    @dataclasses.dataclass(frozen=True)
+    class Worlds(WorldsSpec):
+        repeats: int = key('times each world is evaluated', 'integer', default=1,
+                           old='repetitions')
+
+    with pytest.warns(OldName) as said:
+        read = ValueReader('new.yaml', warn_old_names=True).section(
+            Worlds, {'repetitions': 3}, 'worlds')
+    assert read['repeats'] == 3
+    assert [str(line.message) for line in said] == [
+        'new.yaml: task key worlds.repetitions is an old name, read as worlds.repeats: use '
+        'worlds.repeats']
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        assert ValueReader('bag').section(Worlds, {'repetitions': 3}, 'worlds')['repeats'] == 3
+    with pytest.raises(TaskError, match='worlds.repetitions and worlds.repeats are one '
+                                        'setting given twice: keep repeats'):
+        ValueReader('new.yaml').section(Worlds, {'repetitions': 3, 'repeats': 2}, 'worlds')
+    assert any(line.startswith('| `world_states` |') and 'old name `num_world_states`' in line
+               for line in keys_table())
 
 
 def declared(path):

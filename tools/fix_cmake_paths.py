@@ -1,10 +1,11 @@
 """
 Point the CMake files exported by the ROS 2 wheels at this interpreter.
 
-The wheels are built under /opt/python/cp311-cp311, and their exported CMake targets name
-that interpreter's include folders. Any interface package that depends on another message
-package fails to configure until these paths name the Python and numpy headers of this
-environment. Run it with the environment's own python; it is idempotent.
+The wheels are built under /opt/python/cpXY-cpXY (cp311, cp312, cp313: the wheel for this
+interpreter's version), and their exported CMake targets name that interpreter's include
+folders. Any interface package that depends on another message package fails to configure
+until these paths name the Python and numpy headers of this environment. Run it with the
+environment's own python; it is idempotent.
 """
 
 import pathlib
@@ -13,7 +14,8 @@ import sysconfig
 
 import numpy
 
-BUILT_WITH = '/opt/python/cp311-cp311'
+TAG = f'cp{sys.version_info.major}{sys.version_info.minor}'
+BUILT_WITH = f'/opt/python/{TAG}-{TAG}'
 
 
 def replacements():

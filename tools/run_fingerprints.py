@@ -40,16 +40,16 @@ SUMMARY_TYPE = 'hand_codesign_msgs/msg/GenerationSummary'
 # name -> (task file, changes to its YAML, extra flags of `run`)
 RUNS = {
     'task5': ('config/tasks/task5.yaml', {},
-              ['--seed', '3', '--iterations', '3', '--popsize', '4', '--world-states', '2']),
+              ['--seed', '3', '--iterations', '3', '--population', '4', '--world-states', '2']),
     'task4-hierarchy': ('config/tasks/task4.yaml',
                         {'hierarchy.evaluation_world_states': 4, 'hierarchy.max_fingers': 2},
-                        ['--seed', '5', '--iterations', '2', '--popsize', '4',
+                        ['--seed', '5', '--iterations', '2', '--population', '4',
                          '--world-states', '2']),
     'task1-two-stage': ('config/tasks/task1.yaml', {},
-                        ['--seed', '7', '--iterations', '2', '--popsize', '4',
+                        ['--seed', '7', '--iterations', '2', '--population', '4',
                          '--world-states', '2']),
     'task5-cma-mae': ('config/tasks/task5.yaml', {'optimizer.algorithm': 'cma-mae'},
-                      ['--seed', '11', '--iterations', '3', '--popsize', '6',
+                      ['--seed', '11', '--iterations', '3', '--population', '6',
                        '--world-states', '2']),
 }
 # keys left out wherever they appear (see the module's docstring for why)

@@ -21,6 +21,7 @@ import sys
 import time
 
 from hand_codesign.analysis import records
+from hand_codesign.arithmetic import NATIVE
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.evaluate import evaluate_design
 from hand_codesign.core.evaluate import new_simulator
@@ -154,7 +155,9 @@ def report_comparison(design, evaluation):
     else:
         print('!' * 78 + '\nREPLAY MISMATCH: the re-simulated objectives differ from the ones '
               'recorded in the bag.\nThe run used other code or library versions (see the '
-              'versions in its RunInfo), or evaluation is not deterministic.\n' + '!' * 78,
+              'versions in its RunInfo), or evaluation is not deterministic.\nA run recorded '
+              'on a processor with AVX-512 before the arithmetic was pinned replays with '
+              f'{NATIVE}=1 on a processor of that kind.\n' + '!' * 78,
               file=sys.stderr)
     return same
 

@@ -20,6 +20,10 @@ Writes into DIR (default: `<bag>_report` next to the bag):
   The archive is rebuilt by replaying the search from the bag's evaluations.
 - `best_design.png`: the best design re-simulated in the run's world 0, drawn at the start
   and at the end of the rollout (analysis.design_picture).
+- `search_state.png` and `search_state.csv`: the search's own state per generation
+  (analysis.search_state): CMA-ES's step size and axis ratio, MO-CMA-ES's hypervolume, the
+  archive's coverage and QD score for CMA-MAE and CMA-ME.
+- With `--format svg` or `pdf` every figure is written in that format instead of PNG.
 - `report.md`: task, seed, budget, wall time, evaluations per second, the figures, and the
   best design, its picture and its parameters in physical units; for a run with restarts (ipop-cma,
   bipop-cma) the generation, population and cause of each restart (the search replayed); for
@@ -36,6 +40,7 @@ from hand_codesign.analysis.generations import (generations_from_evaluations,
                                                 generations_from_summaries, pareto_fronts,
                                                 restart_facts, STAGE_WORLDS)
 from hand_codesign.analysis.rig_report import rig_comparison
+from hand_codesign.analysis.search_state import plot_search_state, search_state
 from hand_codesign.analysis.tables import (aligned_table, float_texts, int_texts, markdown_cell,
                                            number_text, write_csv, write_evaluations_csv)
 from hand_codesign.analysis.trust import trust_facts
@@ -48,7 +53,7 @@ from hand_codesign.version import version_text
 import numpy as np
 
 MAX_TABLE_ROWS = 12
-DESIGN_PICTURE = 'best_design.png'
+DESIGN_PICTURE = 'best_design'   # and the figures' suffix
 ELITES_LISTED = 10  # the archive's best designs in the terminal and in report.md
 
 
@@ -61,7 +66,7 @@ def analyze_command(arguments):
     out = pathlib.Path(arguments.out) if arguments.out else default_report_dir(record.path)
     report = Report(record)
     with staged(out) as folder:
-        files = report.write(folder)
+        files = report.write(folder, getattr(arguments, 'format', None) or 'png')
         print(report.summary_text())
         if getattr(arguments, 'unseen', 0):
             files += write_unseen(record.path, folder, arguments.unseen,
@@ -126,6 +131,7 @@ class Report:
         self.best = self._best_design()
         self.restarts = records.restarts_of(record)  # of ipop-cma, bipop-cma; else []
         self.archive = records.archive_of(record)  # of cma-mae, cma-me; else None
+        self.search = search_state(record, self.fronts)   # sigma, hypervolume, QD score
         self.elites = self.archive.elites() if self.archive is not None else []
         self.rig = rig_comparison(record)   # prediction against measurement, if any
         self.picture = None   # best_design.png, once written
@@ -258,7 +264,8 @@ class Report:
     def archive_markdown(self):
         if self.archive is None:
             return []
-        lines = ['', '## Archive', '', '![archive.png](archive.png)', '',
+        figure = f'archive.{getattr(self, "suffix", "png")}'
+        lines = ['', '## Archive', '', f'![{figure}]({figure})', '',
                  f'Its {min(ELITES_LISTED, len(self.elites))} best designs of '
                  f'{len(self.elites)} (all in `archive.csv`); the recommended one is the '
                  "run's result:", '']
@@ -292,8 +299,9 @@ class Report:
 
     # ---------------------------------------------------------------- files
 
-    def write(self, out):
-        """Write every file of the report into folder out; return their paths."""
+    def write(self, out, suffix='png'):
+        """Write every file of the report into folder out (figures as suffix); return them."""
+        self.suffix = suffix
         out = pathlib.Path(out)
         try:
             out.mkdir(parents=True, exist_ok=True)
@@ -304,22 +312,28 @@ class Report:
         self.write_generations_csv(files[1])
         figures = []
         if len(self.generations) and self.names:
-            figures.append(plot_convergence(out / 'convergence.png', self.generations,
+            figures.append(plot_convergence(out / f'convergence.{suffix}', self.generations,
                                             self.names, self.record.run_id, self.restarts))
         if self.fronts:
-            figures.append(plot_pareto(out / 'pareto.png', self.fronts, self.names))
+            figures.append(plot_pareto(out / f'pareto.{suffix}', self.fronts, self.names))
             files.append(out / 'pareto_front.csv')
             self.write_front_csv(files[-1])
+        if self.search is not None:
+            figures.append(plot_search_state(out / f'search_state.{suffix}', self.search,
+                                             self.record.run_id, self.restarts))
+            files.append(out / 'search_state.csv')
+            self.search.write_csv(files[-1])
         files += figures
         if self.archive is not None and self.elites:
-            files.append(plot_archive(out / 'archive.png', self.archive, self.record.run_id))
+            files.append(plot_archive(out / f'archive.{suffix}', self.archive,
+                                      self.record.run_id))
             files.append(out / 'archive.csv')
             self.write_archive_csv(files[-1])
         if self.rig is not None:
             files.append(out / 'rig_gap.csv')
             self.rig.write_csv(files[-1])
-            files.append(self.rig.plot(out / 'rig_gap.png', load_pyplot()))
-        files += self.write_picture(out / DESIGN_PICTURE)
+            files.append(self.rig.plot(out / f'rig_gap.{suffix}', load_pyplot()))
+        files += self.write_picture(out / f'{DESIGN_PICTURE}.{suffix}')
         files.append(out / 'report.md')
         files[-1].write_text(self.markdown([figure.name for figure in figures]),
                              encoding='utf-8')
@@ -387,7 +401,7 @@ class Report:
         lines += self.best_markdown()
         lines += self.archive_markdown()
         if self.rig is not None:
-            lines += self.rig.markdown('rig_gap.png')
+            lines += self.rig.markdown(f'rig_gap.{getattr(self, "suffix", "png")}')
         lines += ['', '## Files', '',
                   '- `evaluations.csv`: every evaluation (normalized genome by gene name)',
                   '- `generations.csv`: best and median of each objective per generation']
@@ -395,6 +409,9 @@ class Report:
             lines.append('- `pareto_front.csv`: the final Pareto front')
         if self.elites:
             lines.append('- `archive.csv`: every elite of the archive, best first')
+        if self.search is not None:
+            lines.append("- `search_state.csv`: the search's state per generation"
+                         + (f' ({self.search.note})' if self.search.note else ''))
         if self.task is not None:
             lines += ['', '## Task file as run', '', '```yaml', self.info.task_yaml.rstrip(),
                       '```']

@@ -40,7 +40,8 @@ def world_quantity(world, quantity, nominal_friction):
 
 def pooled_worlds(out, configuration, records, quantity, kind):
     """Return (quantity values, errors) of a configuration's unseen worlds over its seeds."""
-    task = load_task(f'{out}/tasks/{configuration.key}.yaml')
+    # the campaign's pinned task is its record, as a bag's task is: an old key reads silently
+    task = load_task(f'{out}/tasks/{configuration.key}.yaml', warn_old_names=False)
     values, errors = [], []
     for record in records:
         worlds = unseen_world_states(task.replace(seed=record['seed']), record['unseen_worlds'])

@@ -68,8 +68,9 @@ def measured_rate(runs_dir, configuration, time_step):
 
 def budget_task(task_file, configuration, budget):
     """Return the task of one run of the configuration at `budget`, from its campaign file."""
+    # the campaign's pinned task is its record, as a bag's task is: an old key reads silently
     return load_run_task(task_file, 1, budget.iterations, budget.population,
-                         training_worlds(configuration, budget))
+                         training_worlds(configuration, budget), warn_old_names=False)
 
 
 def rate_lines(folder: str, experiment: Experiment, budget_name: str, seeds: int,

@@ -5,7 +5,7 @@ A run of a preset costs hours; this answers in a second, before any simulation, 
 run will search and meet: the genome (names, bounds in SI units), the objectives, every
 training world (randomized values, the object's start pose and its goals in world
 coordinates), the hierarchy's structures, and the physics steps per evaluation and for the
-whole budget. `--seed`, `--iterations`, `--popsize` and `--world-states` act as in
+whole budget. `--seed`, `--iterations`, `--population` and `--world-states` act as in
 `hand-codesign run`. The values come from `core.run.preview`; `--json` prints them as one JSON
 object on standard output (floats exact), and nothing else goes there. A task a run would
 refuse exits 2 with one line naming the file.
@@ -23,7 +23,7 @@ from hand_codesign.core.search.optimizers import OptimizerError
 from hand_codesign.core.task import TaskError
 from hand_codesign.errors import UserError
 
-OVERRIDES = ('iterations', 'popsize', 'world_states')
+OVERRIDES = ('iterations', 'population', 'world_states')
 # What wrapping must not split: a bracketed list, a number and its unit.
 _UNBROKEN = re.compile(r'\[[^\]]*\]|\d (?:s|m|rad)\b')
 
@@ -49,7 +49,7 @@ def task_preview(arguments):
         raise UserError(f'--seed: expected 0 or more, got {arguments.seed}')
     try:
         task = load_run_task(arguments.task, arguments.seed, arguments.iterations,
-                             arguments.popsize, arguments.world_states)
+                             arguments.population, arguments.world_states)
     except TaskError as error:
         raise UserError(str(error)) from None
     try:

@@ -18,6 +18,7 @@ from hand_codesign.analysis.records import recorded_design
 from hand_codesign.analysis.records import require_run_info
 from hand_codesign.analysis.rig_report import rig_comparison
 from hand_codesign.commands.run import rig_parameters
+from hand_codesign.commands.run import run_domain
 from hand_codesign.commands.run import termination_as_interrupt
 from hand_codesign.core.rig.reevaluation import plan_text
 from hand_codesign.errors import UserError
@@ -47,14 +48,14 @@ def evaluate_command(arguments):
     out = pathlib.Path(arguments.out or f'{str(arguments.bag).rstrip("/")}_rig').resolve()
     if out.exists():
         raise UserError(f'--out {out}: already exists; choose a new path')
-    with tempfile.TemporaryDirectory() as folder, claimed_domain(
-            None if arguments.domain_id in (None, 'auto') else arguments.domain_id) as domain:
+    requested, how = run_domain(arguments.domain_id)  # as `run`: the environment's by default
+    with tempfile.TemporaryDirectory() as folder, claimed_domain(requested) as domain:
         plan = pathlib.Path(folder) / 'plan.json'
         plan.write_text(plan_text(run, designs), encoding='utf-8')
         system = System(out, domain)
         system.rig_parameters = rig_parameters(arguments)
         system.say(f'evaluate: {len(designs)} designs of run {run.run_id} in simulation and '
-                   f'on the {arguments.rig} rig, ROS_DOMAIN_ID={domain}, bag {out}')
+                   f'on the {arguments.rig} rig, ROS_DOMAIN_ID={domain} ({how}), bag {out}')
         try:
             with termination_as_interrupt():
                 code = system.run(1, NODE_MODULE, {'plan_file': plan,

@@ -345,7 +345,7 @@ class Campaign:
                   'afresh', flush=True)
         task = self.run_task(configuration, seed)
         code = self.call(['--task', str(self.task_file(configuration)), '--seed', str(seed),
-                          '--iterations', str(task.iterations), '--popsize',
+                          '--iterations', str(task.iterations), '--population',
                           str(task.population), '--world-states', str(task.num_world_states)]
                          + common)
         return self.checked(key, bag, code)

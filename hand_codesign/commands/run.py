@@ -199,7 +199,7 @@ def check_arguments(arguments):
     if arguments.live is not None and not 0 <= arguments.live <= 65535:
         raise UserError(f'--live: expected a TCP port from 0 (any free one) to 65535, got '
                         f'{arguments.live}')
-    for flag in ('iterations', 'popsize', 'world_states'):
+    for flag in ('iterations', 'population', 'world_states'):
         value = getattr(arguments, flag)
         if value is not None and value < 1:
             raise UserError(f'--{flag.replace("_", "-")}: expected a positive number, '
@@ -218,7 +218,7 @@ def check_arguments(arguments):
         raise UserError(f'--audit-fraction: expected a share from 0 to 1, got {fraction}')
     try:
         return load_run_task(arguments.task, arguments.seed, arguments.iterations,
-                             arguments.popsize, arguments.world_states,
+                             arguments.population, arguments.world_states,
                              getattr(arguments, 'engine', None))
     except TaskError as error:
         raise UserError(str(error))
@@ -230,7 +230,7 @@ def resumed_task(arguments):
 
     With --iterations, more generations than the run's own: a finished run continues.
     """
-    given = [flag for flag in ('task', 'seed', 'popsize', 'world_states', 'engine')
+    given = [flag for flag in ('task', 'seed', 'population', 'world_states', 'engine')
              if getattr(arguments, flag, None) is not None]
     if given:
         raise UserError('--resume takes the task, seed and budget from the bag; drop '

@@ -7,6 +7,7 @@ status 2, never a traceback; Ctrl-C and an external shutdown end the node normal
 
 import threading
 
+from hand_codesign.deprecation import show_old_names
 from hand_codesign.errors import UserError
 from hand_codesign.ros.lifeline import follow_runner
 import rclpy
@@ -28,6 +29,7 @@ def run_node(make_node, logger_name, args=None, errors=(), until=None, farewell=
     (ros.lifeline).
     """
     follow_runner()
+    show_old_names(rclpy.logging.get_logger(logger_name).warning)  # an old task key, one line
     rclpy.init(args=args)
     node = None
     spinner = None

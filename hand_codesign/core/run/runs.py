@@ -35,9 +35,13 @@ def run_task(task_yaml, source, seed, iterations, population, world_states, vari
 
 
 def load_run_task(path, seed=None, iterations=None, population=None, world_states=None,
-                  engine=None):
-    """Return the Task a run of the task file at path uses (None keeps the file's values)."""
-    task = load_task(path)
+                  engine=None, warn_old_names=True):
+    """
+    Return the Task a run of the task file at path uses (None keeps the file's values).
+
+    warn_old_names: as load_task's (False for a file that records a task).
+    """
+    task = load_task(path, warn_old_names)
     return with_overrides(task, task.seed if seed is None else seed, iterations, population,
                           world_states, engine=engine)
 

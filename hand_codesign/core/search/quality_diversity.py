@@ -44,6 +44,7 @@ The choices that keep the contracts of `core.search.optimizers`:
 
 from collections.abc import Mapping
 import dataclasses
+import importlib.util
 
 from hand_codesign.core.outcomes import outcomes_of
 from hand_codesign.core.search.optimizers import AskTellOptimizer
@@ -102,6 +103,10 @@ class QualityDiversity(AskTellOptimizer):
                  sigma0=SIGMA0, describe=None, cells=DEFAULT_CELLS, ranges=None,
                  emitters=None, learning_rate=None):
         super().__init__(dim, weights, population, iterations, seed, first_id, x0, sigma0)
+        if importlib.util.find_spec('ribs') is None:   # optional: only this search needs it
+            raise OptimizerError(f'{self.algorithm} needs pyribs, which is not installed: '
+                                 'pip install ribs (pinned in requirements.txt, and in '
+                                 'requirements-apt.txt for the apt path)')
         self.describe = GenomeDescriptors() if describe is None else describe
         self.cells = tuple(int(c) for c in cells)
         self.ranges = tuple(tuple(float(v) for v in r) for r in (

@@ -24,6 +24,7 @@ budget from its start.
 
 import dataclasses
 
+from hand_codesign.arithmetic import NATIVE
 from hand_codesign.core.search.optimizers import replay
 from hand_codesign.core.search.optimizers import ReplayError
 from hand_codesign.core.search.optimizers import TellError
@@ -105,7 +106,9 @@ def rebuild_search(task, run_id, source, recorded, genomes, record=None):
         batches = replay(search, recorded, genomes)
     except (ReplayError, TellError) as error:
         raise UserError(f'{source}: cannot resume: the recorded run disagrees with a '
-                        f'fresh search of its task and seed: {error}') from None
+                        f'fresh search of its task and seed: {error} (a run recorded on a '
+                        'processor with AVX-512 before the arithmetic was pinned resumes with '
+                        f'{NATIVE}=1 on a processor of that kind)') from None
     if search.stop():
         best = search.best
         raise UserError(

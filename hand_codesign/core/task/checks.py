@@ -25,7 +25,8 @@ def check_task(task):
         minimum = 0 if name == 'seed' else 1
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
                 or value < minimum:
-            fail(name if name in ('seed', 'num_world_states') else f'optimizer.{name}',
+            key = {'seed': 'seed', 'num_world_states': 'world_states'}.get(name)
+            fail(key or f'optimizer.{name}',
                  f'an integer >= {minimum}, got {value!r}')
     if not task.structure or any(int(j) < 1 for j in task.structure):
         fail('hand.structure', f'a non-empty list of positive joint counts, got '

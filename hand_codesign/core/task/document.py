@@ -30,7 +30,9 @@ def keys_table():
     lines = ['| key | meaning | unit | default | values |', '|---|---|---|---|---|']
     for row in rows(Task):
         spec = row.spec
-        lines.append(f'| `{row.path}` | {_cell(spec.meaning)} | {spec.unit or "-"} | '
+        meaning = spec.meaning + (f' (old name `{spec.old}`: still read, with a warning)'
+                                  if spec.old else '')
+        lines.append(f'| `{row.path}` | {_cell(meaning)} | {spec.unit or "-"} | '
                      f'{_cell(default_text(spec))} | {_cell(values_text(spec))} |')
     return lines
 

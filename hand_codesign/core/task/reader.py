@@ -20,13 +20,15 @@ from hand_codesign.core.task.values import join_key
 import yaml
 
 
-def load_task(path):
+def load_task(path, warn_old_names=True):
     """
     Read and validate a task file: return its Task (core.task.spec), a frozen value.
 
-    path: a YAML task file (the schema and its SI units: hand_codesign.core.task). Raises
-    TaskError (a ValueError) with one line naming the file, the dotted key and what was
-    expected, for a file that cannot be read, is not UTF-8 or YAML, or breaks the schema.
+    path: a YAML task file (the schema and its SI units: hand_codesign.core.task);
+    warn_old_names: warn of a key's old name (False for a file that records a task, as a
+    campaign's pinned copy does, rather than one the user edits). Raises TaskError (a
+    ValueError) with one line naming the file, the dotted key and what was expected, for a
+    file that cannot be read, is not UTF-8 or YAML, or breaks the schema.
     """
     try:
         with open(path, encoding='utf-8') as stream:
@@ -36,22 +38,24 @@ def load_task(path):
     except UnicodeDecodeError as error:
         raise TaskError(f'{path}: expected a task file in UTF-8 text, got byte '
                         f'0x{error.object[error.start]:02x} at offset {error.start}') from None
-    return parse_task(text, source=str(path))
+    return parse_task(text, source=str(path), warn_old_names=warn_old_names)
 
 
-def parse_task(text, source='<task>'):
+def parse_task(text, source='<task>', warn_old_names=False):
     """
     Validate YAML text into a Task (core.task.spec), as load_task does for a file.
 
     text: the YAML of a task; source: what names it in errors (a path or 'run ID task'),
     also the folder a seed design's file is read from. The Task keeps the text as
-    `source_text`. Raises TaskError naming source, the dotted key and what was expected.
+    `source_text`. A key's old name (core.task.schema, Key.old) is read as its name, with a
+    warning if warn_old_names (a file the user edits; not a bag's record). Raises TaskError
+    naming source, the dotted key and what was expected.
     """
     try:
         document = yaml.safe_load(text)
     except yaml.YAMLError as error:
         raise TaskError(f'{source}: not valid YAML: {_yaml_problem(error)}') from None
-    reader = _Reader(source)
+    reader = _Reader(source, warn_old_names)
     task = reader.task(document)
     task = dataclasses.replace(task, source=source, source_text=text)
     check_task(task)

@@ -18,6 +18,9 @@ Kinds of value: number, integer, boolean, choice, text, vector (`size` numbers),
 ([x, y, z, w] or {axis, angle}), unit_vector, bounds ([lower, upper]), structure (joints per
 finger), parameter (a parameter setting: fixed, bounds, delta or seed), section (a mapping read
 by the schema of the dataclass `section`), and custom (read by the reader's method `read`).
+
+A key that was renamed keeps its old name in `old`: the reader takes it for the new one, with
+one line saying so (none for a bag's recorded task), and the docs name it.
 """
 
 import dataclasses
@@ -87,6 +90,9 @@ class Key:
     per_joint: bool = False       # a parameter: a fixed value may be a list per joint
     total: bool = False           # a parameter: per_finger_total allowed (segment_length)
     none: bool = False            # a parameter: `none` allowed (joint_limits)
+    # the key's old name in its mapping, still read as this key with one line naming the new
+    # (hand_codesign.deprecation), so a file written before the rename keeps working
+    old: str = ''
 
     @property
     def required(self):

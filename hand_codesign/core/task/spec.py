@@ -46,7 +46,7 @@ class Task:
         'domain randomization: each world draws every quantity uniformly in its range',
         'section', section=RandomizationSpec)
     num_world_states: int = key('the randomized worlds every candidate is evaluated on',
-                                'integer')
+                                'integer', yaml='world_states', old='num_world_states')
     morphology: MorphologySpec = key(
         'the hand parameters (III.B): each a setting {fixed: v}, {bounds: [l, u]}, '
         '{delta: [l, u]} or seed', 'section', section=MorphologySpec)

@@ -15,14 +15,17 @@ import re
 from hand_codesign.core.rotations import axis_angle_quaternion
 from hand_codesign.core.task.parts import Bounds, ParameterSpec, TaskError
 from hand_codesign.core.task.schema import applies, Depends, entries, GIVEN, REQUIRED
+from hand_codesign.deprecation import warn_old_name
 import numpy as np
 
 
 class ValueReader:
     """Reads one value of the parsed YAML at a time, naming its dotted key in errors."""
 
-    def __init__(self, source):
+    def __init__(self, source, warn_old_names=False):
         self.source = source
+        # a file the user edits is told of an old key name; a bag's recorded task is not
+        self.warn_old_names = warn_old_names
 
     def fail(self, key, expected, value=None, got=True):
         text = f'{self.source}: {key}: expected {expected}'
@@ -143,6 +146,7 @@ class ValueReader:
             apply (`when`) gets the field's dataclass default.
         """
         own = entries(cls)
+        value = self.renamed(own, value, key)
         known = [entry.path[0] for entry in own] + [name for name, _ in extra]
         self.mapping(value, key, optional=list(dict.fromkeys(known)))   # no key unknown
         switches = self._switches(own, value, key)
@@ -164,6 +168,23 @@ class ValueReader:
             else:
                 values[entry.field] = _field_default(cls, entry.field)
         return values
+
+    def renamed(self, own, value, key):
+        """Return the mapping with each key given by its old name (Key.old) under its name."""
+        names = {entry.spec.old: entry.path[0] for entry in own if entry.spec.old}
+        if not isinstance(value, dict) or not set(names) & set(value):
+            return value
+        value = dict(value)
+        for old, new in names.items():
+            if old not in value:
+                continue
+            if new in value:
+                raise TaskError(f'{self.source}: {join_key(key, old)} and {join_key(key, new)} '
+                                f'are one setting given twice: keep {new}')
+            if self.warn_old_names:
+                warn_old_name(join_key(key, old), join_key(key, new), f'{self.source}: task key ')
+            value[new] = value.pop(old)
+        return value
 
     def _switches(self, own, value, key):
         """Return {name: value read} of the keys other keys' `when` depends on."""
