@@ -9,10 +9,14 @@ box within tolerance on a limit the joint reached (not one it started on).
 
 import dataclasses
 import json
+import math
 import pathlib
 
+from hand_codesign.analysis import unseen
 from hand_codesign.campaign import folders
 from hand_codesign.campaign import measures as campaign_measures
+from hand_codesign.core.design import (ControllerDesign, Design, FingerDesign, HandDesign,
+                                       JointDesign)
 from hand_codesign.core.evaluate import _TaskContext, evaluate_design
 from hand_codesign.core.experiments.measures import (LIMITS_FOUND_MIN_SHARE, LIMITS_FOUND_SHARE,
                                                      measure_worlds, ORIENTATION_01, PLANE_5MM,
@@ -193,3 +197,28 @@ def test_old_records_without_the_reached_limits_are_measured_again(tmp_path):
     assert folders.read_measures(path, ('plane', 'pose')) == record
     measures = campaign_measures.world_measures_of(record['worlds'])
     assert dataclasses.is_dataclass(measures) and measures.errors['pose'][0] == 2.0
+
+
+def test_what_the_hand_did_tells_a_hand_that_never_reaches_the_box_from_one_that_holds_it():
+    # Task 4's two fingers of one joint beside the box: hanging still, they never touch it;
+    # swung towards it about the vertical plane's axis, they turn it and hold it between them
+    task = load_task(ROOT / 'config' / 'reproduce' / 'task4_structure.yaml').replace(
+        structure=(1, 1), seed=2)
+    spec = genome_spec(task)
+    worlds = unseen_world_states(task, 4)
+
+    def hand(torque):
+        fingers = tuple(FingerDesign((side * 0.04, side * 0.015), (0.065,),
+                                     (JointDesign(math.pi / 2, 0.0, -0.4, 0.4),))
+                        for side in (-1, 1))
+        return spec.encode(Design(HandDesign(fingers, 0.6),
+                                  ControllerDesign('torque', np.array([[-torque, torque]]))))
+
+    still = measure_worlds(hand(0.0), task, worlds)
+    assert not still.touched.any() and not still.touching.any()
+    pushing = measure_worlds(hand(0.01), task, worlds)
+    assert pushing.touched.all() and pushing.touching.sum() >= 3
+    for measures in (still, pushing):
+        groups = np.array([worlds for _, worlds in unseen.behaviours(measures)])
+        np.testing.assert_array_equal(groups.sum(axis=0), 1)  # each world in one of them
+    assert unseen.behaviour_lines(still, POSE)[4].startswith('| never touches the object | 100')

@@ -78,6 +78,39 @@ def band_lines(bands, tolerance):
     return lines
 
 
+def behaviours(measures):
+    """
+    Return [(what the hand did, (worlds,) bool)]: each world in exactly one of them.
+
+    From the rollouts' touch and limit flags (core.experiments.measures): started in collision,
+    never touched the object, touched it and let it go, holds it at the end with a finger on a
+    joint limit, holds it off its limits.
+    """
+    collided = measures.collisions
+    touched, touching = measures.touched, measures.touching
+    on_limit = measures.limit_contacts
+    return [('starts in collision', collided),
+            ('never touches the object', ~collided & ~touched),
+            ('touches it, then lets it go', ~collided & touched & ~touching),
+            ('holds it at the end, a finger on a joint limit', ~collided & touching & on_limit),
+            ('holds it at the end, off its limits', ~collided & touching & ~on_limit)]
+
+
+def behaviour_lines(measures, tolerance):
+    """Return Markdown lines: what the hand did in the worlds, and how often each succeeds."""
+    if measures.touched is None:
+        return []
+    within = measures.errors[tolerance.kind] < tolerance.limit
+    lines = [f'What the hand did (the share of the worlds; of those, the share with '
+             f'{tolerance.describe()}):', '', '| what the hand did | worlds | of them within |',
+             '|---|---|---|']
+    for name, worlds in behaviours(measures):
+        if worlds.any():
+            lines.append(f'| {name} | {percent(float(np.mean(worlds)))} | '
+                         f'{percent(float(np.mean(within[worlds])))} |')
+    return lines + ['']
+
+
 def unseen_report(bag, count, processes=1, engine=None):
     """
     Return (Markdown lines, JSON record) of a run's best design on `count` unseen worlds.
@@ -119,10 +152,13 @@ def unseen_report(bag, count, processes=1, engine=None):
                   f'while touching, whatever the outcome: {percent(first.limit_contact_share)} '
                   f'of the worlds. Start collisions: {percent(first.collision_share)} of the '
                   'worlds. Every world runs the whole motion, with no early termination.', '']
+    lines += behaviour_lines(measures, scored)
     bands = world_bands(task, worlds, measures, scored)
     lines += band_lines(bands, scored)
     record = {'bag': str(bag), 'seed': task.seed, 'unseen_worlds': count,
               'engine': task.physics.engine, 'run_engine': found_in,
               'summaries': [summary.as_dict() for summary in summaries],
-              'bands': {'tolerance': dataclasses.asdict(scored), 'quantities': bands}}
+              'bands': {'tolerance': dataclasses.asdict(scored), 'quantities': bands},
+              'behaviours': {name: float(np.mean(worlds)) for name, worlds in behaviours(measures)}
+              if measures.touched is not None else {}}
     return lines, record

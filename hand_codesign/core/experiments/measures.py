@@ -29,7 +29,11 @@ policy; the measure only looks at the scene, it never changes it):
 - **resting on a reached limit while touching** (`limit_reached`): the same, with a joint on
   a limit that its initial angle was not already on (`resting_on_reached_limit_touching`).
   Both are read at the last frame of a rollout, so an unstable world gives the state of its
-  last stable frame.
+  last stable frame;
+- **what the hand did** (`touched`, `touching`): whether a finger (not the palm) touched the
+  object at any frame of the rollout (frames every TOUCH_EVERY steps and at every goal check)
+  and whether one touches it at the end; with the limit flags they say whether a design never
+  reaches the object, lets it go, or holds it on a joint limit or off its limits.
 
 Per design (`DesignMeasures`): the share of worlds within the tolerance, the median and 90th
 percentile of the error, and **joint limits found**, the paper's mechanism: in a world, the
@@ -50,7 +54,8 @@ from typing import Optional
 from hand_codesign.core.evaluate import _TaskContext, evaluate_design
 # the rule of resting on a limit while touching is core.outcomes' (evaluate uses it too)
 from hand_codesign.core.experiments.robustness import map_chunks, start_and_goal_poses
-from hand_codesign.core.outcomes import limit_rests, on_its_limit, reached_its_limit
+from hand_codesign.core.outcomes import (limit_rests, on_its_limit, reached_its_limit,
+                                         touching_links)
 from hand_codesign.core.sim.worlds import WorldState
 import numpy as np
 
@@ -63,6 +68,7 @@ POSE_ORIENTATION_LIMIT = 0.1  # rad
 ERROR_KINDS = ('position', 'plane', 'x', 'y', 'orientation', 'pose')
 AXES = ('x', 'y')  # the error kinds along one world axis
 CHUNK = 50
+TOUCH_EVERY = 10  # physics steps between the frames that look for a touch (0.05 s at 5 ms)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -114,6 +120,8 @@ class WorldMeasures:
     limit_contacts: np.ndarray  # (worlds,) bool: on a limit, touching (the looser rule)
     limit_reached: np.ndarray  # (worlds,) bool: on a limit it reached, touching
     final_positions: Optional[np.ndarray] = None  # (worlds, 3) m, world frame; not cached
+    touched: Optional[np.ndarray] = None  # (worlds,) bool: a finger touched it at some frame
+    touching: Optional[np.ndarray] = None  # (worlds,) bool: a finger touches it at the end
 
 
 @dataclasses.dataclass(frozen=True)
@@ -162,7 +170,7 @@ def measure_worlds(x, task, worlds, processes=1):
         raise ValueError('measure_worlds needs at least one world')
     task = full_motion(task)
     parts = map_chunks(_measure_chunk, x, task, worlds, CHUNK, processes)
-    initial, final, final_poses, collisions, contacts, reached = (
+    initial, final, final_poses, collisions, contacts, reached, touched, touching = (
         np.concatenate(column) for column in zip(*parts))
     starts, goals = start_and_goal_poses(task, worlds)
     errors = with_pose_error(dict(_offsets(final_poses, goals), position=final[:, 0],
@@ -170,7 +178,7 @@ def measure_worlds(x, task, worlds, processes=1):
     initial_errors = with_pose_error(dict(_offsets(starts, goals), position=initial[:, 0],
                                           orientation=initial[:, 1]))
     return WorldMeasures(errors, initial_errors, collisions, contacts, reached,
-                         final_poses[:, :3])
+                         final_poses[:, :3], touched, touching)
 
 
 def full_motion(task):
@@ -247,22 +255,33 @@ def frame_interval(schedule):
     return math.gcd(*schedule.check_step_list)
 
 
+def watch_interval(schedule):
+    """Return steps between the measure's frames: every TOUCH_EVERY steps and every check."""
+    return math.gcd(frame_interval(schedule), TOUCH_EVERY)
+
+
 class LimitContactWatch:
     """An on_world / on_frame pair for evaluate_design: resting on a limit while touching."""
 
     def __init__(self, count):
         self.flags = np.zeros(count, dtype=bool)  # on a limit, touching
         self.reached = np.zeros(count, dtype=bool)  # on a limit it reached, touching
+        self.touched = np.zeros(count, dtype=bool)  # a finger touched it at some frame
+        self.touching = np.zeros(count, dtype=bool)  # a finger touches it (the last frame)
         self.world = 0
 
     def on_world(self, index, simulator):
         self.world = index
         self.flags[index] = self.reached[index] = False
+        self.touched[index] = self.touching[index] = False
 
     def on_frame(self, step, simulator):
         # every frame overwrites the flags: the last one is the rollout's end
         self.flags[self.world], self.reached[self.world] = limit_rests(
             simulator, (on_its_limit, reached_its_limit))
+        # a finger, not the palm: an object lying on the palm is not held by the fingers
+        self.touching[self.world] = any(link >= 0 for link in touching_links(simulator))
+        self.touched[self.world] |= self.touching[self.world]
 
 
 def _measure_chunk(job):
@@ -270,15 +289,16 @@ def _measure_chunk(job):
     design = _TaskContext.of(task).genome_spec().decode(x)
     watch = LimitContactWatch(len(worlds))
     evaluation = evaluate_design(design, task, list(worlds), on_frame=watch.on_frame,
-                                 frame_every=frame_interval(_TaskContext.of(task).schedule),
+                                 frame_every=watch_interval(_TaskContext.of(task).schedule),
                                  on_world=watch.on_world)
     if evaluation.collision and len(worlds) > 1:
         # a collision in one world marks the whole chunk: find the worlds that collide
         parts = [_measure_chunk((x, task, (world,))) for world in worlds]
         return tuple(np.concatenate(column) for column in zip(*parts))
+    simulated = ~evaluation.collision
     return (evaluation.initial_errors, evaluation.final_errors, evaluation.final_poses,
-            np.full(len(worlds), evaluation.collision), watch.flags & ~evaluation.collision,
-            watch.reached & ~evaluation.collision)
+            np.full(len(worlds), evaluation.collision), watch.flags & simulated,
+            watch.reached & simulated, watch.touched & simulated, watch.touching & simulated)
 
 
 __all__ = ['DesignMeasures', 'full_motion', 'measure_design', 'measure_worlds', 'summarize',
