@@ -8,7 +8,9 @@ import struct
 
 from hand_codesign.core import contract
 from hand_codesign.core.run.evaluation_jobs import EvaluatorInbox
+from hand_codesign.core.run.signing import canonical
 from hand_codesign.core.run.signing import Credential
+from hand_codesign.core.run.signing import GENERATION_SUMMARY_TYPE
 from hand_codesign.core.run.signing import RunKeys
 from hand_codesign.core.run.signing import SIGNED_FIELDS
 from hand_codesign.core.run.signing import SigningError
@@ -205,3 +207,20 @@ def test_each_evaluator_has_its_own_key():
     assert keys.key_of('evaluator-0') != keys.key_of('evaluator-1')
     assert RunKeys(bytes(32)).key_of('evaluator-0') != keys.key_of('evaluator-0')
     assert Credential.parse(keys.credential('a').text(), 'x').run_info_key == keys.run_info_key
+
+
+def test_a_summary_read_back_from_a_bag_older_than_racing_still_verifies():
+    # bags recorded before told_worlds existed: their summaries were signed without it, and a
+    # reader decoding them with the bag's own schema gets a mapping without the field
+    signer, run = signed_run()
+    older = {name: kind for name, kind in SIGNED_FIELDS[GENERATION_SUMMARY_TYPE]
+             if name != 'told_worlds'}
+    summary = GenerationSummary(run_id='run-1', generation=2, structure=[2, 2], best=[0.5],
+                                objective_names=['p'], told_ids=[4], told_objectives=[0.5])
+    fields = {name: getattr(summary, name) for name in older}
+    old_bytes = canonical(GENERATION_SUMMARY_TYPE, dict(fields, told_worlds=[]))
+    assert canonical(GENERATION_SUMMARY_TYPE, fields) != old_bytes  # signed without the field
+    signature = signer.summary_key.sign(fields)
+    assert summary_valid(run.summary_key, dict(fields, signature=signature))
+    # a mapping of this version's schema always has the field: dropping it is no way around it
+    assert not summary_valid(run.summary_key, dict(fields, told_worlds=[3], signature=signature))

@@ -89,6 +89,10 @@ SIGNED_FIELDS = {
         ('rejected_messages', 'u')),
 }
 UNSIGNED_FIELDS = ('signature', 'stamp')
+# Fields added to the messages after runs were recorded (racing over the worlds): a message read
+# back from an older bag lacks them and was signed without them, so they are left out of its
+# canonical bytes; a message of this version always has them.
+LATER_FIELDS = frozenset(('worlds_from', 'worlds_to', 'told_worlds'))
 
 
 class SigningError(UserError):
@@ -116,6 +120,8 @@ def canonical(type_name, message):
     """Return the bytes signed for a message (an object or mapping with its fields)."""
     parts = [_string(type_name)]
     for name, kind in SIGNED_FIELDS[type_name]:
+        if name in LATER_FIELDS and isinstance(message, dict) and name not in message:
+            continue
         value = _field(message, name)
         if kind.endswith('[]'):
             values = list(value)
