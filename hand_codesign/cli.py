@@ -60,6 +60,18 @@ DEFAULT_PORT = 11811   # Fast DDS's own default for a discovery server
 MAX_DOMAIN_ID = 232    # ros.runner's; not imported from there, so that --help needs no ROS
 
 
+def camera_view(text):
+    """Return (yaw, pitch) in degrees of a --camera value 'YAW,PITCH'."""
+    try:
+        yaw, pitch = (float(part) for part in text.split(','))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected YAW,PITCH in degrees, e.g. 0,60; got {text!r}')
+    if not -90 < pitch < 90:
+        raise argparse.ArgumentTypeError(f'the pitch must lie between -90 and 90 degrees, got '
+                                         f'{pitch:g}')
+    return yaw, pitch
+
+
 def domain_id_option(text):
     """Return --domain-id's value: 'auto', or a ROS domain id (0 to 232)."""
     if text == 'auto':
@@ -263,6 +275,10 @@ def add_bag_arguments(verb, parser):
         output = parser.add_mutually_exclusive_group()
         output.add_argument('--gif', help='write an animated GIF of the motion (default: none)')
         output.add_argument('--gui', action='store_true', help='open the PyBullet window')
+        parser.add_argument('--camera', type=camera_view, metavar='YAW,PITCH',
+                            help='the animation\'s camera angles in degrees (default 0,-20: '
+                                 'from the side, a little above; 0,60 looks up through the '
+                                 'table at a hand above an object)')
         output.add_argument('--mcap', metavar='FILE',
                             help='write the rollout as a ROS 2 MCAP of markers (Foxglove; '
                                  'default: none)')

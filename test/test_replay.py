@@ -74,3 +74,20 @@ def test_gui_without_a_display_says_so(real_run):
 def test_bad_choices_are_user_errors(real_run, tmp_path, capsys, flags, message):
     assert main(['replay', str(real_run.bag), '--gif', str(tmp_path / 'x.gif')] + flags) == 2
     assert message in capsys.readouterr().err
+
+
+def test_the_camera_can_look_up_through_the_table(real_run, tmp_path, capsys):
+    # a hand above a box hides it from the default camera; from below the ground is not drawn
+    side, below = tmp_path / 'side.gif', tmp_path / 'below.gif'
+    assert main(['replay', str(real_run.bag), '--gif', str(side)]) == 0
+    assert main(['replay', str(real_run.bag), '--gif', str(below), '--camera', '0,60']) == 0
+    first = [imageio.imread(path, index=None)[0] for path in (side, below)]
+    assert first[0].shape == first[1].shape and np.any(first[0] != first[1])
+
+
+@pytest.mark.parametrize('value', ['60', '0,90', 'a,b'])
+def test_a_bad_camera_is_one_line(real_run, tmp_path, value):
+    process = run_cli('replay', real_run.bag, '--gif', tmp_path / 'x.gif', '--camera', value)
+    assert process.returncode == 2 and 'Traceback' not in process.stderr
+    assert process.stderr.strip().splitlines()[-1].startswith('hand-codesign replay: error: '
+                                                              'argument --camera')

@@ -81,7 +81,8 @@ def replay_command(arguments, write_mcap=None):
     else:
         gif = pathlib.Path(arguments.gif) if arguments.gif else default_gif_path(
             record.path, design.candidate_id, arguments.world)
-        frames = render_gif(gif, task, design, worlds[arguments.world])
+        frames = render_gif(gif, task, design, worlds[arguments.world],
+                            getattr(arguments, 'camera', None))
         print(f'animation: {gif} ({frames} frames of world {arguments.world})')
     return 0 if same else 1
 
@@ -176,8 +177,9 @@ def camera(task):
 class FrameGrabber:
     """Collects camera images of the world being rendered (an on_frame callback)."""
 
-    def __init__(self, task):
+    def __init__(self, task, view=None):
         target, distance = camera(task)
+        self.yaw, self.pitch = view or (CAMERA_YAW, CAMERA_PITCH)
         self.target, self.distance = target, distance
         self.width, self.height = IMAGE_SIZE
         self.frames = []
@@ -195,8 +197,8 @@ class FrameGrabber:
         client = simulator.client
         if self.view is None:
             self.view = client.computeViewMatrixFromYawPitchRoll(
-                cameraTargetPosition=self.target, distance=self.distance, yaw=CAMERA_YAW,
-                pitch=CAMERA_PITCH, roll=0.0, upAxisIndex=2)
+                cameraTargetPosition=self.target, distance=self.distance, yaw=self.yaw,
+                pitch=self.pitch, roll=0.0, upAxisIndex=2)
             self.projection = client.computeProjectionMatrixFOV(
                 fov=45.0, aspect=self.width / self.height, nearVal=0.01, farVal=10.0)
         if step == 0:
@@ -213,10 +215,16 @@ def frame_every(task):
     return max(1, int(round(1.0 / (FRAMES_PER_SECOND * task.time_step))))
 
 
-def render_frames(task, design, world):
-    """Return the RGB frames of one world's rollout of a RecordedDesign, from the camera."""
+def render_frames(task, design, world, view=None):
+    """
+    Return the RGB frames of one world's rollout of a RecordedDesign, from the camera.
+
+    view: (yaw, pitch) of the camera in degrees, default (CAMERA_YAW, CAMERA_PITCH); a positive
+    pitch looks up from below the ground, which the renderer leaves out, so a hand that
+    reaches down onto an object is seen through the table.
+    """
     physical = genome_spec(task).decode(design.x)
-    grabber = FrameGrabber(task)
+    grabber = FrameGrabber(task, view)
     if task.physics.engine != 'pybullet':
         return kinematic_frames(task, physical, world, grabber)
     with Simulator(rendering=True) as simulator:
@@ -288,10 +296,10 @@ def rollout_poses(task, design, world):
     return model, palm, frames
 
 
-def render_gif(path, task, design, world):
+def render_gif(path, task, design, world, view=None):
     """Write the animated GIF of one world to path; return the number of frames."""
     import imageio.v3 as imageio
-    frames = render_frames(task, design, world)
+    frames = render_frames(task, design, world, view)
     try:
         with staged(path) as temporary:
             imageio.imwrite(temporary, np.stack(frames), extension='.gif',
