@@ -276,7 +276,7 @@ def add_bag_arguments(verb, parser):
         output.add_argument('--gif', help='write an animated GIF of the motion (default: none)')
         output.add_argument('--gui', action='store_true', help='open the PyBullet window')
         parser.add_argument('--camera', type=camera_view, metavar='YAW,PITCH',
-                            help='the animation\'s camera angles in degrees (default 0,-20: '
+                            help="the animation's camera angles in degrees (default 0,-20: "
                                  'from the side, a little above; 0,60 looks up through the '
                                  'table at a hand above an object)')
         output.add_argument('--mcap', metavar='FILE',
