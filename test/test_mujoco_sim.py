@@ -229,3 +229,22 @@ def test_a_world_written_into_the_model_is_the_model_compiled_for_it(preset):
                     np.testing.assert_array_equal(getattr(written, name), value, err_msg=name)
             for name in ('meaninertia', 'meanmass', 'extent'):  # meansize: drawings only
                 assert getattr(written.stat, name) == getattr(expected.stat, name), name
+
+
+@pytest.mark.parametrize('preset', ['task1.yaml', 'task2.yaml', 'task5.yaml'])  # each shape
+def test_the_object_s_centre_of_mass_and_inertia_axes_are_its_shape_s(preset):
+    task = on_mujoco(load_task(TASKS / preset))
+    spec = genome_spec(task)
+    model = hand_model(spec.decode(spec.initial_mean()).hand, task.hand)
+    shape = task.object_spec.shape
+    with MujocoSimulator() as simulator:
+        simulator.build(task, model)
+        for world in world_states(task, 3):  # turned and moved off the nominal start
+            state = object_state(task, world)
+            simulator.reset(state, shape)
+            m, d = simulator.mj_model, simulator.mj_data
+            mujoco.mj_kinematics(m, d)
+            body, geom = simulator._object_body, simulator._object_geom
+            np.testing.assert_allclose(d.xipos[body], d.geom_xpos[geom], atol=1e-12)
+            np.testing.assert_allclose(d.xipos[body], state.position, atol=1e-12)
+            np.testing.assert_allclose(d.ximat[body], d.geom_xmat[geom], atol=1e-12)

@@ -217,6 +217,10 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
     thing.add_freejoint(name='object')
     thing.mass = 1.0
     thing.inertia = [1.0, 1.0, 1.0]
+    # the centre of mass at the shape's centre, its axes the shape's: an unset ipos makes the
+    # compiler copy the body's position into it, which put a box's centre of mass on its top face
+    thing.ipos = [0.0, 0.0, 0.0]
+    thing.iquat = [1.0, 0.0, 0.0, 0.0]
     thing.explicitinertial = True
     thing.add_geom(name='object', type=_GEOM_TYPES[object_shape], size=[0.01, 0.01, 0.01],
                    friction=[1.0, 0, 0], condim=3, priority=OBJECT_PRIORITY, solref=solref,
@@ -333,11 +337,8 @@ class MujocoSimulator(EventPlans):
         m.body_mass[body] = state.mass
         m.body_inertia[body] = object_inertia(shape, state.size, state.mass)
         orientation = _wxyz(state.orientation)
-        # the compiler puts a free body's frame and its inertial frame at the start pose
-        for position_field, orientation_field in ((m.body_pos, m.body_quat),
-                                                  (m.body_ipos, m.body_iquat)):
-            position_field[body] = state.position
-            orientation_field[body] = orientation
+        m.body_pos[body] = state.position
+        m.body_quat[body] = orientation
         start = self._object_qpos
         for pose in (m.qpos0, m.qpos_spring):
             pose[start:start + 3] = state.position
