@@ -231,12 +231,13 @@ def test_tasks_select_cma_mae_and_cma_me_with_their_archive(tmp_path):
 
 
 def test_joints_without_limits_span_the_archive_by_their_initial_angles(tmp_path, capsys):
-    task = load_task(ROOT / 'config' / 'tasks' / 'task4_free_joints.yaml').replace(algorithm='cma-mae')
+    free_joints = ROOT / 'config' / 'tasks' / 'task4_free_joints.yaml'
+    task = load_task(free_joints).replace(algorithm='cma-mae')
     optimizer = make_optimizer(task, genome_spec(task).size)
     assert optimizer.describe.names == ('finger_length', 'initial_angle')
     assert optimizer.ranges == ((pytest.approx(0.03), pytest.approx(0.10)),
                                 (pytest.approx(-math.pi / 2), pytest.approx(math.pi / 2)))
-    document = yaml.safe_load((ROOT / 'config' / 'tasks' / 'task4_free_joints.yaml').read_text())
+    document = yaml.safe_load(free_joints.read_text())
     document['optimizer'].update(algorithm='cma-me', archive={
         'descriptors': ['finger_length', 'joint_range']})
     path = write_task(tmp_path, document, 'limitless.yaml')
