@@ -10,7 +10,7 @@ about 5 times ours at Table I's 240 Hz) and measures, per setting, on the design
 PyBullet search (bench_physics.searched_designs, the same as bench_engines.py):
 
 - Spearman's rank correlation of the weighted sum between the engines, Task 5 and Task 6
-  (issue 27's target >= 0.85);
+  (the second engine's target >= 0.85);
 - how far a joint pushed onto its limit for 1.5 s passes it (target < 1 mrad; PyBullet's
   figure in the same run);
 - how far a box at rest sits from PyBullet's resting height (target < 0.2 mm);
@@ -191,7 +191,7 @@ def write_tables(arguments, rows, bullet_overshoot):
     scales = ' '.join(f'{scale:g}' for scale in arguments.scales)
     cones = ' '.join(arguments.cones)
     lines = [
-        '# MuJoCo softness against agreement with PyBullet (issue 27)', '',
+        '# MuJoCo softness against agreement with PyBullet', '',
         f'`python bench/bench_engine_softness.py --scales {scales} --cones {cones} '
         f'--designs {arguments.designs} --generations {arguments.generations} --population '
         f'{arguments.population} --world-states {arguments.world_states} --out {arguments.out}`. '
