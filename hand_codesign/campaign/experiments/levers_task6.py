@@ -63,7 +63,7 @@ def palm_beside_lever_configurations():
     reading of Table I, as are its axes). Chosen on tuning seeds 1 to 3. After the choice,
     the best lever (the worst quarter) with the third (the closer palm; the second,
     resampled worlds, is paired above), on the same seeds: it did worse than either
-    (docs/RESULTS.md).
+    (docs/results/levers-task6/README.md).
     """
     palm_70mm = (('hand.base_position', (-0.07, 0.0, 0.015)),)
     variants = (('worst25', WORST_QUARTER), ('resample', RESAMPLED),
