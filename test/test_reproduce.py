@@ -525,9 +525,12 @@ def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsy
 
 
 def test_every_preset_and_table_named_in_results_exists_and_checks():
-    # docs/RESULTS.md's figures stand on presets and committed tables: each one it names must
-    # be there, and each preset must load as a task (what `hand-codesign check` validates)
-    text = (ROOT / 'docs' / 'RESULTS.md').read_text(encoding='utf-8')
+    # docs/RESULTS.md's figures and its experiment pages' (docs/results/*/README.md) stand on
+    # presets and committed tables: each one they name must be there, and each preset must
+    # load as a task (what `hand-codesign check` validates)
+    pages = [ROOT / 'docs' / 'RESULTS.md',
+             *sorted((ROOT / 'docs' / 'results').glob('*/README.md'))]
+    text = '\n'.join(page.read_text(encoding='utf-8') for page in pages)
     presets = set(re.findall(r'(?:config/(?:tasks|reproduce)/)?(\w+\.yaml)', text))
     presets -= {'smaller.yaml', 'campaign.yaml'}
     assert {'task5.yaml', 'task6.yaml', 'task5_along_x.yaml', 'task6_diagonal.yaml'} <= presets
@@ -535,11 +538,11 @@ def test_every_preset_and_table_named_in_results_exists_and_checks():
         found = [folder / name for folder in (ROOT / 'config' / 'tasks',
                                               ROOT / 'config' / 'reproduce')
                  if (folder / name).exists()]
-        assert found, f'docs/RESULTS.md names {name}, which is in neither config folder'
+        assert found, f'the results pages name {name}, which is in neither config folder'
         for path in found:
             load_task(path)
     for table in set(re.findall(r'(?:docs/)?(results/[\w.-]+/[\w.-]+\.(?:md|csv|png))', text)):
-        assert (ROOT / 'docs' / table).exists(), f'docs/RESULTS.md names a missing {table}'
+        assert (ROOT / 'docs' / table).exists(), f'the results pages name a missing {table}'
 
 
 def test_seeds_are_a_count_a_range_or_a_list(capsys):
