@@ -73,14 +73,14 @@ def test_a_fixed_placement_keeps_the_genome_and_the_results_of_the_preset(positi
 
 @pytest.mark.parametrize('position, yaw, message', [
     ({'bounds': [[-0.01, 0.01], [0.0, 0.0]]}, None,
-     "hand.base_position.bounds: expected three pairs [[x lower, x upper], [y lower, y upper], "
-     "[z lower, z upper]], got [[-0.01, 0.01], [0.0, 0.0]]"),
+     'hand.base_position.bounds: expected three pairs [[x lower, x upper], [y lower, y upper], '
+     '[z lower, z upper]], got [[-0.01, 0.01], [0.0, 0.0]]'),
     ({'bounds': [[0.01, -0.01], [0, 0], [0.15, 0.15]]}, None,
      'hand.base_position.bounds[0]: expected lower <= upper, got [0.01, -0.01]'),
     ({'range': [[0, 0], [0, 0], [0, 0]]}, None,
-     "hand.base_position: expected [x, y, z] or {fixed: [x, y, z]} or {bounds: [[x lower, "
-     "x upper], [y lower, y upper], [z lower, z upper]]}, got {'range': [[0, 0], [0, 0], "
-     "[0, 0]]}"),
+     'hand.base_position: expected [x, y, z] or {fixed: [x, y, z]} or {bounds: [[x lower, '
+     'x upper], [y lower, y upper], [z lower, z upper]]}, got {"range": [[0, 0], [0, 0], '
+     '[0, 0]]}'.replace('"', "'")),
     ([0.0, 0.15], None, 'hand.base_position: expected a list of 3 numbers, got [0.0, 0.15]'),
     (None, {'bounds': [0.3]}, 'hand.base_yaw.bounds: expected a pair [lower, upper], got [0.3]'),
     (None, [-0.2, 0.2], 'hand.base_yaw: expected a number or {fixed: v} or {bounds: [lower, '

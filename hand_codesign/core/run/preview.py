@@ -61,7 +61,8 @@ KINDS = ('position', 'orientation')
 
 # Unit of a gene by the last part of its name (core.task.genome's naming scheme).
 _UNITS = (('hand.base_position_', 'm'), ('hand.base_yaw', 'rad'), ('.position_x', 'm'),
-          ('.position_z', 'm'), ('.length', 'm'), ('_angle', 'rad'), ('_limit', 'rad'), ('controller.target.', 'rad'),
+          ('.position_z', 'm'), ('.length', 'm'), ('_angle', 'rad'), ('_limit', 'rad'),
+          ('controller.target.', 'rad'),
           ('controller.torque.', 'N m'), ('controller.kp.', 'N m/rad'),
           ('controller.kd.', 'N m s/rad'), ('hand.friction', '1'))
 

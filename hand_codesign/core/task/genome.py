@@ -264,9 +264,8 @@ class _Builder:
             self.gene(f'hand.base_position_{axis}', bounds,
                       None if seed_position is None else seed_position[index])
             for index, (axis, bounds) in enumerate(zip('xyz', ranges)))
-        yaw = self.gene('hand.base_yaw', hand.base_yaw_bounds or Bounds(hand.base_yaw,
-                                                                         hand.base_yaw),
-                        seed_yaw)
+        yaw_range = hand.base_yaw_bounds or Bounds(hand.base_yaw, hand.base_yaw)
+        yaw = self.gene('hand.base_yaw', yaw_range, seed_yaw)
         return position, yaw
 
     def finger_sources(self, finger, joints):
