@@ -180,3 +180,18 @@ def test_a_short_search_records_palm_poses_and_replays_the_best(tmp_path, capsys
     assert main(['replay', str(bag)]) == 0
     assert 'replay reproduces the recorded objectives bit for bit' in capsys.readouterr().out
     assert not np.isnan(palms).any()
+
+
+def test_check_lists_the_palm_genes_with_their_units(tmp_path, capsys):
+    path = tmp_path / 'task5_palm.yaml'
+    path.write_text(yaml.safe_dump(palm_document(
+        position={'bounds': [[-0.01, 0.01], [-0.01, 0.01], [0.15, 0.15]]},
+        yaw={'bounds': [-0.2, 0.2]})))
+    assert main(['check', str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    rows = {line.split()[0]: line.split()[1:] for line in lines
+            if line.strip().startswith('hand.base_')}
+    assert rows == {'hand.base_position_x': ['-0.01', '0.01', 'm'],
+                    'hand.base_position_y': ['-0.01', '0.01', 'm'],
+                    'hand.base_yaw': ['-0.2', '0.2', 'rad']}
+    assert 'genome: 27 values' in '\n'.join(lines)
