@@ -195,3 +195,14 @@ def test_check_lists_the_palm_genes_with_their_units(tmp_path, capsys):
                     'hand.base_position_y': ['-0.01', '0.01', 'm'],
                     'hand.base_yaw': ['-0.2', '0.2', 'rad']}
     assert 'genome: 27 values' in '\n'.join(lines)
+
+
+def test_a_fixed_yaw_turns_the_palm_without_a_gene():
+    task = palm_task(position=[0.0, 0.0, 0.15], yaw='pi/12')
+    spec = genome_spec(task)
+    assert spec.names == genome_spec(load_task(TASK5)).names
+    design = spec.decode(spec.initial_mean())
+    assert design.hand.base_yaw is None
+    _, orientation = palm_poses(Simulator, task, design)
+    assert same_turn(orientation, quaternion_multiply(
+        axis_angle_quaternion((0, 0, 1), np.pi / 12), task.hand.base_orientation))
