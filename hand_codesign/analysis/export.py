@@ -113,7 +113,11 @@ def design_document(design):
     for gain in ('kp', 'kd'):
         if getattr(controller, gain) is not None:
             document[gain] = _floats(getattr(controller, gain))
-    return {'friction': float(design.hand.friction), 'fingers': fingers,
+    placement = {}
+    if design.hand.base_position is not None:   # a searched palm placement
+        placement = {'base_position': _floats(design.hand.base_position),
+                     'base_yaw': float(design.hand.base_yaw)}
+    return {'friction': float(design.hand.friction), **placement, 'fingers': fingers,
             'controller': document}
 
 
@@ -196,7 +200,7 @@ def export_design(record, recorded, out):
                              encoding='utf-8')
         from hand_codesign.core.sim.mujoco_sim import model_mjcf  # see core.evaluate.new_simulator
         (out / MJCF_NAME).write_text(model_mjcf(
-            model, task.time_step, task.hand.base_position, task.hand.base_orientation,
+            model, task.time_step, model.base_position, model.base_orientation,
             task.policy.gravity_compensation, name), encoding='utf-8')
         yaml_path = out / YAML_NAME
         header = (f'# {task.name}: candidate {recorded.candidate_id} of run {record.run_id}, '

@@ -698,7 +698,8 @@ def ranked_candidate_id(record, generation=None, rank=0):
     return int(rows.candidate_id[order[rank]])
 
 
-_UNITS = (('.length', 'm'), ('.position_x', 'm'), ('.position_z', 'm'),
+_UNITS = (('hand.base_position_', 'm'), ('hand.base_yaw', 'rad'), ('.length', 'm'),
+          ('.position_x', 'm'), ('.position_z', 'm'),
           ('_angle', 'rad'), ('_limit', 'rad'), ('controller.target.', 'rad'),
           ('controller.torque.', 'N m'), ('controller.kp.', 'N m / rad'),
           ('controller.kd.', 'N m s / rad'), ('friction', ''))

@@ -279,7 +279,7 @@ def rollout_poses(task, design, world):
     """
     physical = genome_spec(task).decode(design.x)
     model = hand_model(physical.hand, task.hand)
-    palm = (tuple(task.hand.base_position), tuple(task.hand.base_orientation))
+    palm = (model.base_position, model.base_orientation)
     frames = []
 
     def grab(step, simulator):

@@ -43,6 +43,11 @@ class HandDesign:
 
     fingers: Tuple[FingerDesign, ...]
     friction: float
+    # where the palm stands when the search places it (beyond the paper): the palm centre in
+    # the world frame (m) and a turn about the world vertical after the task's orientation
+    # (rad); None: the task's fixed base_position and base_yaw
+    base_position: Optional[Tuple[float, float, float]] = None
+    base_yaw: Optional[float] = None
 
     @property
     def structure(self):

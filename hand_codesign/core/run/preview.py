@@ -60,8 +60,9 @@ from hand_codesign.core.task.schema import away_from_defaults, settings
 KINDS = ('position', 'orientation')
 
 # Unit of a gene by the last part of its name (core.task.genome's naming scheme).
-_UNITS = (('.position_x', 'm'), ('.position_z', 'm'), ('.length', 'm'),
-          ('_angle', 'rad'), ('_limit', 'rad'), ('controller.target.', 'rad'),
+_UNITS = (('hand.base_position_', 'm'), ('hand.base_yaw', 'rad'), ('.position_x', 'm'),
+          ('.position_z', 'm'), ('.length', 'm'), ('_angle', 'rad'), ('_limit', 'rad'),
+          ('controller.target.', 'rad'),
           ('controller.torque.', 'N m'), ('controller.kp.', 'N m/rad'),
           ('controller.kd.', 'N m s/rad'), ('hand.friction', '1'))
 

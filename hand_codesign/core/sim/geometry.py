@@ -146,7 +146,7 @@ def design_shapes(task, design):
     start; a translucent copy of it stands at each goal pose.
     """
     model = hand_model(design.hand, task.hand)
-    base = (tuple(task.hand.base_position), tuple(task.hand.base_orientation))
+    base = (model.base_position, model.base_orientation)
     state = object_state(task, WorldState.nominal())
     shape = task.object_spec.shape
     shapes = hand_shapes(model, base, link_frames(model, base))

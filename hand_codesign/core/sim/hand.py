@@ -23,6 +23,7 @@ from typing import Optional, Tuple
 from xml.sax.saxutils import quoteattr
 
 from hand_codesign.core.design import HandDesign
+from hand_codesign.core.rotations import axis_angle_quaternion, quaternion_multiply
 from hand_codesign.core.task import HandSpec
 
 # Rotates a capsule's own axis (z in Bullet and URDF) onto the segment's +y.
@@ -67,6 +68,9 @@ class HandModel:
     friction: float
     links: Tuple[LinkSpec, ...]
     max_joint_force: float
+    # the palm's pose in the world: position (m) and orientation (x, y, z, w); palm_pose
+    base_position: Tuple[float, float, float] = (0.0, 0.0, 0.0)
+    base_orientation: Tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
 
     @property
     def num_joints(self):
@@ -97,6 +101,25 @@ def _segment_link(name, parent, joint_position, joint, length, hand_spec):
         inertia=(across, along, across))
 
 
+def palm_pose(design: HandDesign, hand_spec: HandSpec):
+    """
+    Return (position, orientation x, y, z, w) of the palm in the world: where the hand stands.
+
+    The task's base_position and base_orientation, unless the design places the palm (a
+    searched placement, core.task.genome): its base_position, and its base_yaw as a turn
+    about the world vertical through the palm centre after the task's orientation. A yaw of
+    0 leaves the task's orientation exactly as it is.
+    """
+    position = (hand_spec.base_position if design.base_position is None
+                else design.base_position)
+    yaw = hand_spec.base_yaw if design.base_yaw is None else design.base_yaw
+    orientation = tuple(hand_spec.base_orientation)
+    if yaw != 0.0:
+        orientation = quaternion_multiply(axis_angle_quaternion((0.0, 0.0, 1.0), yaw),
+                                          orientation)
+    return (tuple(float(v) for v in position), tuple(float(v) for v in orientation))
+
+
 def hand_model(design: HandDesign, hand_spec: HandSpec):
     """Return the HandModel (link table) of a hand design with the task's fixed sizes."""
     links = []
@@ -119,9 +142,11 @@ def hand_model(design: HandDesign, hand_spec: HandSpec):
                                        hand_spec))
             parent = len(links) - 1
             joint_position = (0.0, length, 0.0)
+    position, orientation = palm_pose(design, hand_spec)
     return HandModel(palm_size=tuple(float(v) for v in hand_spec.palm_size),
                      palm_mass=float(hand_spec.palm_mass), friction=float(design.friction),
-                     links=tuple(links), max_joint_force=MAX_JOINT_FORCE)
+                     links=tuple(links), max_joint_force=MAX_JOINT_FORCE,
+                     base_position=position, base_orientation=orientation)
 
 
 def _vector(values):

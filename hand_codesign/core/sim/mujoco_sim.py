@@ -280,8 +280,8 @@ class MujocoSimulator(EventPlans):
 
     def build(self, task, model: HandModel):
         """Compile ground, hand and object of one candidate on `task`."""
-        spec = hand_spec(model, task.time_step, task.hand.base_position,
-                         task.hand.base_orientation, task.object_spec.shape,
+        spec = hand_spec(model, task.time_step, model.base_position,
+                         model.base_orientation, task.object_spec.shape,
                          task.policy.gravity_compensation)
         spec.memory = ARENA_BYTES
         self.mj_model = spec.compile()

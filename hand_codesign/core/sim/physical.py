@@ -13,6 +13,9 @@ every candidate the optimizer sends:
       finger{i}.segment{j}.length                                m
       finger{i}.joint{j}.axis_angle, .initial_angle              rad
       finger{i}.joint{j}.lower_limit, .upper_limit               rad; NaN: no limit
+      hand.base_position_x, _y, _z, hand.base_yaw                world, m and rad; only
+                                                                 when the search places
+                                                                 the palm (beyond the paper)
 
 - `hand_urdf`: the hand as standard URDF (cylinders and spheres, no capsules);
 - the controller: its kind ('torque' or 'pd'), mode ('constant' or 'interpolated' torques,
@@ -54,15 +57,23 @@ class PhysicalDesign:
     kd: Tuple[float, ...]
 
 
-def design_names(structure):
-    """Return the names of the morphology values of a hand structure, in message order."""
+PLACEMENT_NAMES = ('hand.base_position_x', 'hand.base_position_y', 'hand.base_position_z',
+                   'hand.base_yaw')
+
+
+def design_names(structure, placed=False):
+    """
+    Return the names of the morphology values of a hand structure, in message order.
+
+    placed: the design carries its palm's placement (a searched one), named last.
+    """
     names = ['hand.friction']
     for finger, joints in enumerate(structure):
         names += [f'finger{finger}.position_x', f'finger{finger}.position_z']
         names += [f'finger{finger}.segment{joint}.length' for joint in range(joints)]
         names += [f'finger{finger}.joint{joint}.{field}' for joint in range(joints)
                   for field in JOINT_FIELDS]
-    return tuple(names)
+    return tuple(names) + (PLACEMENT_NAMES if placed else ())
 
 
 def morphology_values(hand):
@@ -75,6 +86,8 @@ def morphology_values(hand):
             values += [joint.axis_angle, joint.initial_angle,
                        math.nan if joint.lower_limit is None else joint.lower_limit,
                        math.nan if joint.upper_limit is None else joint.upper_limit]
+    if hand.base_position is not None:
+        values += [*hand.base_position, hand.base_yaw]
     return tuple(float(value) for value in values)
 
 
@@ -90,7 +103,8 @@ def physical_design(design, task):
     controller = design.controller
     policy = task.policy
     return PhysicalDesign(
-        names=design_names(design.hand.structure), values=morphology_values(design.hand),
+        names=design_names(design.hand.structure, design.hand.base_position is not None),
+        values=morphology_values(design.hand),
         urdf=hand_urdf(design.hand, task.hand, capsules=False),
         controller_kind=controller.kind,
         controller_mode=policy.mode if policy.kind == 'torque' else 'pd',
@@ -119,7 +133,7 @@ def design_from_physical(structure, names, values, controller_kind, controller_v
     values row-major, knots x joints.
     """
     structure = tuple(int(joints) for joints in structure)
-    expected = design_names(structure)
+    expected = design_names(structure, PLACEMENT_NAMES[-1] in tuple(names))
     if tuple(names) != expected:
         raise ValueError(f'design_names do not describe structure {list(structure)}: expected '
                          f'{len(expected)} names starting {list(expected[:3])}, got '
@@ -146,7 +160,12 @@ def design_from_physical(structure, names, values, controller_kind, controller_v
         raise ValueError(f'{table.size} controller values for {joints} joints; expected a '
                          'multiple (knots x joints)')
     gains = [None if not len(gain) else np.asarray(gain, dtype=float) for gain in (kp, kd)]
-    return Design(hand=HandDesign(fingers=tuple(fingers), friction=value['hand.friction']),
+    placed = {}
+    if PLACEMENT_NAMES[-1] in value:
+        placed = {'base_position': tuple(value[name] for name in PLACEMENT_NAMES[:3]),
+                  'base_yaw': value[PLACEMENT_NAMES[-1]]}
+    return Design(hand=HandDesign(fingers=tuple(fingers), friction=value['hand.friction'],
+                                  **placed),
                   controller=ControllerDesign(kind=controller_kind,
                                               values=table.reshape(-1, joints),
                                               kp=gains[0], kd=gains[1]))

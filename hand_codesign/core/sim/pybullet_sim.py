@@ -136,8 +136,7 @@ class Simulator(EventPlans):
         self.ground = client.createMultiBody(
             0.0, ground_shape, basePosition=(0.0, 0.0, -GROUND_HALF_EXTENTS[2]))
         client.changeDynamics(self.ground, -1, lateralFriction=GROUND_FRICTION)
-        self.hand = build_hand(client, model, task.hand.base_position,
-                               task.hand.base_orientation)
+        self.hand = build_hand(client, model, model.base_position, model.base_orientation)
         self.task, self.model = task, model
         self._joints = list(range(model.num_joints))
         self._initial_angles = list(model.initial_angles)

@@ -29,11 +29,20 @@ class DesignReader(ValueReader):
         return self.design(value, key)
 
     def design(self, value, key):
-        section = self.mapping(value, key, required=('friction', 'fingers', 'controller'))
+        section = self.mapping(value, key, required=('friction', 'fingers', 'controller'),
+                               optional=('base_position', 'base_yaw'))
         fingers = self.items(section['fingers'], join_key(key, 'fingers'), 'fingers',
                              self.finger)
+        placed = {}   # a searched palm placement (core.task.genome), both or neither
+        if ('base_position' in section) != ('base_yaw' in section):
+            self.fail(key, 'both base_position and base_yaw, or neither', got=False)
+        if 'base_position' in section:
+            placed = {'base_position': self.vector(section['base_position'],
+                                                   join_key(key, 'base_position'), 3),
+                      'base_yaw': self.number(section['base_yaw'], join_key(key, 'base_yaw'),
+                                              angle=True)}
         hand = HandDesign(fingers=fingers, friction=self.number(
-            section['friction'], join_key(key, 'friction'), minimum=0))
+            section['friction'], join_key(key, 'friction'), minimum=0), **placed)
         controller = self.controller(section['controller'], join_key(key, 'controller'),
                                      hand.num_joints)
         return Design(hand=hand, controller=controller)

@@ -6,6 +6,8 @@ with a name and physical bounds from the task (Table I), and fixes all other val
 Design. Genes are ordered morphology first, then controller:
 
     hand.friction
+    hand.base_position_{x,y,z}, hand.base_yaw              world frame, m and rad (searched
+                                                           palm placement, beyond the paper)
     finger{i}.position_x, finger{i}.position_z             hand frame, m
     finger{i}.segment{j}.length                            m
     finger{i}.joint{j}.initial_angle, .axis_angle          rad
@@ -29,6 +31,13 @@ seed has every morphology gene (its structure is the task's), and its controller
 when its controller is of the task's policy kind: task1_torque.yaml seeds the hand from the
 PD seed of Task 1 and starts its torques at the centre, never reading the seed's target
 angles as torques.
+
+Palm placement (beyond the paper): where the task gives bounds on `hand.base_position` or
+`hand.base_yaw`, each axis and the yaw of non-zero width is a gene, and the Design's
+HandDesign carries the decoded base position and yaw (its fixed axes the task's values), so
+the simulators, the export and the pictures place the palm there (core.sim.hand.hand_model).
+Where the task fixes them (the default, every preset), the HandDesign carries None and the
+genome is the one it always was.
 
 Decoding also keeps the Design physical: each joint's two limit genes are sorted into
 lower <= upper, and the initial angle is clipped into the joint's limits.
@@ -182,6 +191,7 @@ class _Builder:
         self.friction = self.source('hand.friction', 'morphology.friction',
                                     morphology.friction, 0, None,
                                     seed.hand.friction if seed else None, minimum=0.0)
+        self.placement = self.placement_sources(seed)
         self.fingers = []
         for finger, joints in enumerate(task.structure):
             self.fingers.append(self.finger_sources(finger, joints))
@@ -225,6 +235,10 @@ class _Builder:
         if minimum is not None and bounds.lower < minimum:
             self.fail(key, f'bounds >= {minimum} for {name}, got [{bounds.lower:.6g}, '
                       f'{bounds.upper:.6g}]')
+        return self.gene(name, bounds, seed_value)
+
+    def gene(self, name, bounds, seed_value):
+        """Return a _Gene of `name` within `bounds` (registered), or the value of a point."""
         if bounds.width == 0:
             return bounds.lower
         self.names.append(name)
@@ -235,6 +249,24 @@ class _Builder:
 
     def fail(self, key, expected):
         raise TaskError(f'{self.task.source}: {key}: expected {expected}')
+
+    def placement_sources(self, seed):
+        """Return (three base position sources, base yaw source), or None if fixed."""
+        hand = self.task.hand
+        if not hand.placement_searched:
+            return None
+        seed_hand = seed.hand if seed is not None else None
+        seed_position = getattr(seed_hand, 'base_position', None)
+        seed_yaw = getattr(seed_hand, 'base_yaw', None)
+        ranges = hand.base_position_bounds or tuple(
+            Bounds(value, value) for value in hand.base_position)
+        position = tuple(
+            self.gene(f'hand.base_position_{axis}', bounds,
+                      None if seed_position is None else seed_position[index])
+            for index, (axis, bounds) in enumerate(zip('xyz', ranges)))
+        yaw_range = hand.base_yaw_bounds or Bounds(hand.base_yaw, hand.base_yaw)
+        yaw = self.gene('hand.base_yaw', yaw_range, seed_yaw)
+        return position, yaw
 
     def finger_sources(self, finger, joints):
         morphology = self.task.morphology
@@ -333,8 +365,13 @@ class _Builder:
                 position=tuple(float(_value(p, physical)) for p in position),
                 segment_lengths=tuple(float(_value(s, physical)) for s in lengths),
                 joints=tuple(joints)))
+        placed = {}
+        if self.placement is not None:
+            position, yaw = self.placement
+            placed = {'base_position': tuple(float(_value(p, physical)) for p in position),
+                      'base_yaw': float(_value(yaw, physical))}
         hand = HandDesign(fingers=tuple(fingers),
-                          friction=float(_value(self.friction, physical)))
+                          friction=float(_value(self.friction, physical)), **placed)
         rows, gains = self.controller
         values = np.array([[_value(s, physical) for s in row] for row in rows], dtype=float)
         kp, kd = (None if name not in gains else
@@ -357,6 +394,14 @@ class _Builder:
                 physical[source.index] = value
 
         put(self.friction, design.hand.friction)
+        if self.placement is not None:
+            # a design placed nowhere (a seed, a fixed task's) stands at the nominal place
+            hand = self.task.hand
+            position = design.hand.base_position or hand.base_position
+            yaw = hand.base_yaw if design.hand.base_yaw is None else design.hand.base_yaw
+            for source, value in zip(self.placement[0], position):
+                put(source, value)
+            put(self.placement[1], yaw)
         for sources, finger in zip(self.fingers, design.hand.fingers):
             position, lengths, joint_sources = sources
             for source, value in zip(position, finger.position):

@@ -91,8 +91,13 @@ class ObjectSpec:
 class HandSpec:
     """Where the hand is and the sizes the genome does not optimize."""
 
+    # Fixed: the value; searched (beyond the paper): the centre of the bounds, the
+    # bounds in base_position_bounds (core.task.genome makes them genes)
     base_position: Tuple[float, float, float] = key(
-        "the palm centre's position, the hand's fixed base", 'vector', unit='m', size=3)
+        "the palm centre's position, the hand's fixed base: [x, y, z], or searched within "
+        '{bounds: [[x lower, x upper], [y lower, y upper], [z lower, z upper]]} (beyond the '
+        'paper)', 'custom', unit='m', read='base_position',
+        values='3 numbers, {fixed: 3 numbers} or {bounds: 3 pairs [lower, upper]}')
     base_orientation: Tuple[float, float, float, float] = key(
         "the hand frame's orientation (the palm's normal is its +y): a quaternion [x, y, z, w] "
         'or {axis, angle}', 'quaternion')
@@ -105,6 +110,23 @@ class HandSpec:
                                  positive=True)
     palm_mass: float = key("the palm's mass (the palm is fixed; for export)", 'number',
                            unit='kg', positive=True, default=0.1)
+    # Fixed: the value; searched: the centre of the bounds, the bounds in base_yaw_bounds
+    base_yaw: float = key(
+        'a turn of the hand about the world vertical through the palm centre, after '
+        'base_orientation: a number, or searched within {bounds: [lower, upper]} (beyond the '
+        'paper)', 'custom', unit='rad', read='base_yaw', default=0.0,
+        values='a number, {fixed: v} or {bounds: [lower, upper]}')
+    # not keys: the searched ranges the reader finds at base_position and base_yaw (None:
+    # fixed), each axis or the yaw a gene where its range is wider than a point
+    base_position_bounds: Optional[Tuple[Bounds, Bounds, Bounds]] = None
+    base_yaw_bounds: Optional[Bounds] = None
+
+    @property
+    def placement_searched(self):
+        """Return whether the search places the palm (any base bounds of non-zero width)."""
+        ranges = (self.base_position_bounds or ()) + (
+            (self.base_yaw_bounds,) if self.base_yaw_bounds is not None else ())
+        return any(bounds.width > 0 for bounds in ranges)
 
 
 @dataclass(frozen=True)

@@ -73,7 +73,62 @@ class _Reader(SettingsReader, DesignReader):
     def task(self, document):
         values = self.section(Task, document, '', skip=('structure',))
         values['structure'] = self.hand_structure(document['hand'], values['hierarchy'])
+        values['hand'] = self.hand_placement(values['hand'], document['hand'])
         return Task(**values)
+
+    # ---- the palm's placement: fixed (the paper), or searched within bounds
+
+    def hand_placement(self, hand, section):
+        """Return the HandSpec with the searched ranges of its base position and yaw (if any)."""
+        position = section.get('base_position')
+        yaw = section.get('base_yaw')
+        return dataclasses.replace(
+            hand,
+            base_position_bounds=self.placement(position, 'hand.base_position', 3)[1],
+            base_yaw_bounds=None if yaw is None else self.placement(yaw, 'hand.base_yaw',
+                                                                    0)[1])
+
+    def base_position(self, spec, value, key):
+        """Return the nominal base position: the fixed one, or the centre of the bounds."""
+        return self.placement(value, key, 3)[0]
+
+    def base_yaw(self, spec, value, key):
+        """Return the nominal base yaw: the fixed one, or the centre of the bounds."""
+        return self.placement(value, key, 0)[0]
+
+    def placement(self, value, key, size):
+        """
+        Return (nominal, bounds or None) of a base position (size 3) or yaw (size 0).
+
+        A fixed value is [x, y, z] (a yaw: a number) or {fixed: ...}; a searched one is
+        {bounds: [[x lower, x upper], [y lower, y upper], [z lower, z upper]]} (a yaw:
+        {bounds: [lower, upper]}), the nominal value the centre of the bounds.
+        """
+        angle = size == 0
+        fixed = ('[x, y, z] or {fixed: [x, y, z]}' if size else 'a number or {fixed: v}')
+        pairs = ('[[x lower, x upper], [y lower, y upper], [z lower, z upper]]' if size
+                 else '[lower, upper]')
+        if isinstance(value, dict):
+            if len(value) != 1 or set(value) - {'fixed', 'bounds'}:
+                self.fail(key, f'{fixed} or {{bounds: {pairs}}}', value)
+            if 'fixed' in value:
+                return self.placement(value['fixed'], join_key(key, 'fixed'), size)
+            raw, bounds_key = value['bounds'], join_key(key, 'bounds')
+            if size:
+                if not isinstance(raw, list) or len(raw) != 3:
+                    self.fail(bounds_key, f'three pairs {pairs}', raw)
+                bounds = tuple(self.bounds(pair, f'{bounds_key}[{index}]')
+                               for index, pair in enumerate(raw))
+                return tuple(b.centre for b in bounds), bounds
+            bounds = self.bounds(raw, bounds_key, angle=True)
+            return bounds.centre, bounds
+        if size:
+            if not isinstance(value, list):
+                self.fail(key, f'{fixed} or {{bounds: {pairs}}}', value)
+            return self.vector(value, key, 3), None
+        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+            self.fail(key, f'{fixed} or {{bounds: {pairs}}}', value)
+        return self.number(value, key, angle=angle), None
 
     def hand_structure(self, hand, hierarchy):
         """Return hand.structure, or the hierarchy's start where the file leaves it out."""
