@@ -34,8 +34,8 @@ from hand_codesign.core.sim.geometry import GOAL_COLOUR
 from hand_codesign.core.sim.geometry import goal_poses
 from hand_codesign.core.sim.geometry import hand_shapes
 from hand_codesign.core.sim.geometry import joint_transforms
-from hand_codesign.core.sim.hand import PALM_LINK
 from hand_codesign.core.sim.geometry import object_shapes
+from hand_codesign.core.sim.hand import PALM_LINK
 from hand_codesign.core.sim.worlds import object_state
 from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.errors import UserError
