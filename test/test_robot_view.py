@@ -231,3 +231,101 @@ def test_the_robot_view_is_a_console_script_with_a_parameter_file():
     given = yaml.safe_load((ROOT / 'config' / 'robot_view.yaml').read_text())
     assert given['/**']['ros__parameters'] == {
         name: default for name, (default, _, _) in PARAMETERS.items()}
+
+
+PROBE = """
+import json
+import sys
+import time
+
+from hand_codesign.core import contract
+from hand_codesign.ros import topics
+from mcap.reader import make_reader
+import rclpy
+from rclpy.node import Node
+from rclpy.serialization import deserialize_message
+from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage
+
+raw = {}
+with open(sys.argv[1], 'rb') as stream:
+    for _, channel, message in make_reader(stream).iter_messages():
+        raw.setdefault(channel.topic.lstrip('/'), []).append(message.data)
+sent = {name: deserialize_message(raw[name][index], topics.MESSAGE_TYPES[name]) for name, index
+        in ((contract.RUN_INFO, 0), (contract.GENERATION_SUMMARY, -1))}
+rclpy.init()
+node = Node('robot_view_probe')
+got = {contract.TF: [], contract.TF_STATIC: [], contract.ROBOT_DESCRIPTION: []}
+
+
+def frames(message):
+    return {t.child_frame_id: [t.header.frame_id, [t.transform.rotation.x, t.transform.rotation.y,
+                                                   t.transform.rotation.z, t.transform.rotation.w]]
+            for t in message.transforms}
+
+
+node.create_subscription(TFMessage, contract.TF, lambda m: got[contract.TF].append(frames(m)),
+                         topics.TF_QOS)
+publishers = {name: node.create_publisher(type(message), name, topics.QOS[name])
+              for name, message in sent.items()}
+
+
+def spin_until(done, timeout):
+    deadline = time.monotonic() + timeout
+    while not done() and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    return done()
+
+
+if not spin_until(lambda: all(p.get_subscription_count() for p in publishers.values()), 60):
+    sys.exit('the robot view never subscribed')
+for name, message in sent.items():
+    publishers[name].publish(message)
+if not spin_until(lambda: got[contract.TF], 60):
+    sys.exit('no /tf came')
+# a late subscriber still gets the description and the palm: transient local
+node.create_subscription(String, contract.ROBOT_DESCRIPTION,
+                         lambda m: got[contract.ROBOT_DESCRIPTION].append(m.data),
+                         topics.LATCHED_QOS)
+node.create_subscription(TFMessage, contract.TF_STATIC,
+                         lambda m: got[contract.TF_STATIC].append(frames(m)), topics.LATCHED_QOS)
+spin_until(lambda: False, float(sys.argv[2]))
+print(json.dumps(got))
+node.destroy_node()
+rclpy.shutdown()
+"""
+
+
+def test_the_robot_view_node_serves_a_late_viewer_and_ends_after_the_final_design(
+        real_run, tmp_path):
+    import domain_coordinator
+    from bag_samples import ros_env
+    task, physical, design, motion = best_motion(real_run.bag)
+    duration = len(motion.times) / 25
+    with domain_coordinator.domain_id() as domain:
+        env = ros_env(domain)
+        view = subprocess.Popen([sys.executable, '-m', 'hand_codesign.ros.robot_view_node'],
+                                env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                text=True)
+        try:
+            probe = subprocess.run([sys.executable, '-c', PROBE, str(real_run.mcap),
+                                    str(duration + 3.0)], env=env, capture_output=True,
+                                   text=True, timeout=180)
+            code = view.wait(timeout=60)     # it ends once the final design has played
+        finally:
+            if view.poll() is None:
+                view.kill()
+            output = view.communicate()[0]
+    assert probe.returncode == 0, probe.stderr
+    assert code == 0, output
+    got = json.loads(probe.stdout)
+    urdf = decoded_messages(real_run.mcap, contract.ROBOT_DESCRIPTION)[-1].data
+    assert got[contract.ROBOT_DESCRIPTION] == [urdf]
+    assert got[contract.TF_STATIC][-1][PALM_LINK][0] == contract.WORLD_FRAME
+    played = got[contract.TF]
+    assert len(motion.times) // 2 <= len(played) <= len(motion.times)
+    model = hand_model(physical.hand, task.hand)
+    for frames, angles in zip(played[::-1], motion.joint_angles[::-1]):   # from the last on
+        for parent, child, (_, orientation) in joint_transforms(model, angles):
+            assert frames[child][0] == parent
+            assert np.allclose(frames[child][1], orientation, atol=1e-12)
