@@ -67,13 +67,14 @@ class RobotView(Node):
             self.run_info = message
 
     def on_summary(self, message):
-        if self.run_info is not None and message.run_id == self.run_info.run_id:
-            self.latest = message
+        self.latest = message  # kept until the RunInfo is there: topics arrive in any order
 
     def play(self):
         """Show a new best design if one came, then publish the next frame of the rollout."""
-        summary, self.latest = self.latest, None
+        summary = self.latest if self.run_info is not None else None
         if summary is not None:
+            self.latest = None
+        if summary is not None and summary.run_id == self.run_info.run_id:
             self.final = self.final or summary.final
             design = (summary.best_candidate_id, tuple(summary.structure))
             if design != self.shown:
