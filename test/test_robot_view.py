@@ -11,7 +11,10 @@ whole rollout, as `core.experiments.motion` re-simulates it. `replay --mcap` wri
 The Foxglove layout is installed to share/ and reads the robot model.
 """
 
+import contextlib
+import itertools
 import json
+import random
 import subprocess
 import sys
 
@@ -302,7 +305,10 @@ def test_the_robot_view_node_serves_a_late_viewer_and_ends_after_the_final_desig
     from bag_samples import ros_env
     task, physical, design, motion = best_motion(real_run.bag)
     duration = len(motion.times) / 25
-    with domain_coordinator.domain_id() as domain:
+    # a domain of 200 to 232 (as test_recorder's): runs of `--domain-id auto` take 1 to 100
+    first = random.randrange(200, 233)
+    domains = itertools.cycle([*range(first, 233), *range(200, first)])
+    with domain_coordinator.domain_id(selector=lambda: next(domains)) as domain:
         env = ros_env(domain)
         view = subprocess.Popen([sys.executable, '-m', 'hand_codesign.ros.robot_view_node'],
                                 env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
@@ -311,13 +317,14 @@ def test_the_robot_view_node_serves_a_late_viewer_and_ends_after_the_final_desig
             probe = subprocess.run([sys.executable, '-c', PROBE, str(real_run.mcap),
                                     str(duration + 3.0)], env=env, capture_output=True,
                                    text=True, timeout=180)
-            code = view.wait(timeout=60)     # it ends once the final design has played
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                view.wait(timeout=30)     # it ends once the final design has played
         finally:
             if view.poll() is None:
                 view.kill()
             output = view.communicate()[0]
-    assert probe.returncode == 0, probe.stderr
-    assert code == 0, output
+    assert probe.returncode == 0, probe.stderr + output
+    assert view.returncode == 0, output
     got = json.loads(probe.stdout)
     urdf = decoded_messages(real_run.mcap, contract.ROBOT_DESCRIPTION)[-1].data
     assert got[contract.ROBOT_DESCRIPTION] == [urdf]
