@@ -336,3 +336,37 @@ def test_the_robot_view_node_serves_a_late_viewer_and_ends_after_the_final_desig
         for parent, child, (_, orientation) in joint_transforms(model, angles):
             assert frames[child][0] == parent
             assert np.allclose(frames[child][1], orientation, atol=1e-12)
+
+
+def test_the_launch_ends_once_the_final_design_has_played(monkeypatch):
+    import importlib.util
+    import types
+    # ROS's launch packages are not on PyPI: stand-ins keep what they are given (test_launch)
+    for name, classes in {'launch': ['LaunchDescription'],
+                          'launch.actions': ['DeclareLaunchArgument', 'EmitEvent',
+                                             'OpaqueFunction', 'RegisterEventHandler',
+                                             'TimerAction'],
+                          'launch.event_handlers': ['OnProcessExit'],
+                          'launch.events': ['Shutdown'], 'launch_ros': [],
+                          'launch_ros.actions': ['Node']}.items():
+        module = types.ModuleType(name)
+        for class_name in classes:
+            setattr(module, class_name, type(class_name, (), {
+                '__init__': lambda self, *a, **k: setattr(self, 'keywords', k)}))
+        monkeypatch.setitem(sys.modules, name, module)
+    spec = importlib.util.spec_from_file_location('codesign_launch',
+                                                  ROOT / 'launch' / 'codesign.launch.py')
+    launch = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(launch)
+
+    def kinds(actions):
+        return [type(action).__name__ for action in actions]
+
+    ended = types.SimpleNamespace
+    assert kinds(launch.after_run(ended(returncode=1), None)) == ['EmitEvent']   # failed: now
+    waiting, = launch.after_run(ended(returncode=0), None)
+    assert type(waiting).__name__ == 'TimerAction'
+    assert waiting.keywords['period'] == launch.ROBOT_VIEW_WAIT
+    assert kinds(waiting.keywords['actions']) == ['EmitEvent']
+    assert kinds(launch.after_view(ended(returncode=0), None)) == ['EmitEvent']
+    assert launch.after_view(ended(returncode=2), None) == []   # a failed view ends nothing
