@@ -100,6 +100,9 @@ TRIAL_FAILED = 3
 # The recorder logs a line starting with this once its subscriptions exist; a runner waits
 # for it before starting the optimizer.
 RECORDER_READY = 'recorder ready'
+# The robot view logs this once it listens; a runner starts the optimizer only then, so the
+# robot view hears the run's final best design even when the run is short.
+ROBOT_VIEW_READY = 'robot view ready'
 # The live view (`hand-codesign run --live`) logs this, then ': ws://HOST:PORT', once it serves.
 LIVE_READY = 'live view ready'
 

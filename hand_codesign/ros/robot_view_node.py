@@ -61,6 +61,8 @@ class RobotView(Node):
         self.create_subscription(GenerationSummary, contract.GENERATION_SUMMARY,
                                  self.on_summary, topics.QOS[contract.GENERATION_SUMMARY])
         self.create_timer(1.0 / FRAMES_PER_SECOND, self.play)
+        self.get_logger().info(f'{contract.ROBOT_VIEW_READY}: publishing '
+                               f'{", ".join(contract.ROBOT_TOPIC_TYPES)}')
 
     def on_run_info(self, message):
         if self.run_info is None:  # the run's own comes first (a resumed run's too)

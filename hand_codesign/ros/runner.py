@@ -39,6 +39,7 @@ import time
 from hand_codesign.core.contract import EVALUATORS_READY
 from hand_codesign.core.contract import LIVE_READY
 from hand_codesign.core.contract import RECORDER_READY
+from hand_codesign.core.contract import ROBOT_VIEW_READY
 from hand_codesign.core.run.signing import CREDENTIAL_VARIABLE
 from hand_codesign.core.run.signing import SECRET_VARIABLE
 from hand_codesign.core.run.summary import PROGRESS_PREFIX
@@ -173,6 +174,8 @@ class System:
             self.start_optimizer(optimizer_module, dict(optimizer_parameters, start_signal=True))
         # the processes above start side by side; the optimizer sends once the recorder records
         self.wait_until_ready(self.recorder, RECORDER_READY, 'the recorder')
+        self.wait_until_ready(self.robot_view, ROBOT_VIEW_READY, 'the robot view',
+                              self.bag / 'logs' / 'robot_view.log')
         if self.live_view is not None:
             self.announce_live_view()
         if start_signal:
@@ -235,9 +238,8 @@ class System:
 
     def spawn_robot_view(self):
         """Return the robot view (ros.robot_view_node): the best design as a robot model."""
-        with open(self.bag / 'logs' / 'robot_view.log', 'w') as log:
-            return self.node('hand_codesign.ros.robot_view_node', {}, stdout=log,
-                             stderr=subprocess.STDOUT)
+        return self.node('hand_codesign.ros.robot_view_node', {}, stdout=subprocess.PIPE,
+                         stderr=subprocess.STDOUT, text=True)
 
     def wait_for_robot_view(self):
         """Let the robot view play the final best design's rollout into the bag, then end."""
@@ -256,8 +258,12 @@ class System:
         self.say(f'live: {address} (in Foxglove: Open connection, Foxglove WebSocket; layout '
                  'config/foxglove_layout.json)')
 
-    def wait_until_ready(self, process, ready, what):
-        """Return the line of a starting process that says `ready`; then drain its output."""
+    def wait_until_ready(self, process, ready, what, log=None):
+        """
+        Return the line of a starting process that says `ready`; then drain its output.
+
+        log: a file that gets the process's output (else it is dropped once ready).
+        """
         deadline = time.monotonic() + 60.0
         lines = []
         for line in process.stdout:
@@ -267,7 +273,8 @@ class System:
         if process.poll() is not None or not lines or ready not in lines[-1]:
             self.stop_all()
             raise UserError(f'{what} did not start:\n' + ''.join(lines[-20:]))
-        threading.Thread(target=process.stdout.read, daemon=True).start()
+        threading.Thread(target=process.stdout.read if log is None else
+                         lambda: copy_output(process.stdout, lines, log), daemon=True).start()
         return lines[-1]
 
     def relay_optimizer(self):
@@ -337,6 +344,15 @@ class ProgressThrottle:
             return False
         self.last = now
         return True
+
+
+def copy_output(stream, lines, path):
+    """Write lines already read, then the rest of a process's output stream, to path."""
+    with open(path, 'w') as log:
+        log.writelines(lines)
+        for line in stream:
+            log.write(line)
+            log.flush()
 
 
 def stop(processes):
