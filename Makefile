@@ -6,6 +6,7 @@ PYTHON ?= python3
 VENV := $(CURDIR)/.venv
 PY := $(VENV)/bin/python
 MSG_BUILD := $(CURDIR)/build/hand_codesign_msgs
+TF2_BUILD := $(CURDIR)/build/tf2_msgs
 STAMPS := $(VENV)/.stamps
 
 # The ROS 2 wheels do not set AMENT_PREFIX_PATH; ament_index_python needs it.
@@ -46,7 +47,19 @@ $(STAMPS)/msgs: $(STAMPS)/deps $(wildcard msg_defs/*)
 	  || { tail -n 30 build.log; echo "[setup] message build failed: see $(MSG_BUILD)/build.log"; exit 1; }
 	@touch $@
 
-$(STAMPS)/package: $(STAMPS)/msgs setup.py setup.cfg
+# tf2_msgs/TFMessage (/tf, /tf_static of the robot view): not among the PyPI ROS wheels, so it is
+# built from msg_defs/tf2_msgs/ like the project's own messages (a ROS installation has its own).
+$(STAMPS)/tf2_msgs: $(STAMPS)/deps $(wildcard msg_defs/tf2_msgs/* msg_defs/tf2_msgs/msg/*)
+	@echo "[setup] building tf2_msgs from msg_defs/tf2_msgs/ into .venv"
+	@rm -rf $(TF2_BUILD) && mkdir -p $(TF2_BUILD)
+	@cd $(TF2_BUILD) && cmake $(CURDIR)/msg_defs/tf2_msgs -DCMAKE_INSTALL_PREFIX=$(VENV) \
+	  -DPython3_EXECUTABLE=$(PY) -DBUILD_TESTING=OFF > configure.log 2>&1 \
+	  || { tail -n 30 configure.log; echo "[setup] cmake configure failed: see $(TF2_BUILD)/configure.log"; exit 1; }
+	@cd $(TF2_BUILD) && $(MAKE) --no-print-directory -j2 install > build.log 2>&1 \
+	  || { tail -n 30 build.log; echo "[setup] message build failed: see $(TF2_BUILD)/build.log"; exit 1; }
+	@touch $@
+
+$(STAMPS)/package: $(STAMPS)/msgs $(STAMPS)/tf2_msgs setup.py setup.cfg
 	@echo "[setup] installing hand_codesign in development mode"
 	@$(PY) -m pip install --quiet --no-deps --no-build-isolation -e .
 	@touch $@

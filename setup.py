@@ -32,6 +32,7 @@ setup(
             'evaluator = hand_codesign.ros.evaluator_node:main',
             'recorder = hand_codesign.ros.recorder_node:main',
             'live_view = hand_codesign.ros.live_node:main',
+            'robot_view = hand_codesign.ros.robot_view_node:main',
             'rig_evaluator = hand_codesign.ros.rig_evaluator_node:main',
             'sim_rig = hand_codesign.ros.sim_rig_node:main',
             'codesign = hand_codesign.cli:main',

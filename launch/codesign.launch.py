@@ -7,8 +7,10 @@ A co-design run as ROS 2 users start one: `ros2 launch hand_codesign codesign.la
 Starts the recorder (it writes the bag), `evaluators` evaluators (evaluator-0, evaluator-1, ...,
 as a run's own, each node named after its id: /evaluator_0, ...) and the optimizer, each with
 its parameter file from this package's share/config, then `params_file` if given, then the
-launch arguments given; with `live:=true` also the live view for Foxglove. When the optimizer
-ends, the launch stops the others and the recorder closes the bag. The processes are those of
+launch arguments given, and the robot view (the best design as robot_description and /tf for
+RViz and Foxglove); with `live:=true` also the live view for Foxglove. When the optimizer ends
+and the robot view has played the final best design, the launch stops the others and the
+recorder closes the bag. The processes are those of
 `hand-codesign run`, which adds what a launch file does not: restarting a dead evaluator or
 recorder, and a free ROS domain on request. This launch runs on the shell's ROS_DOMAIN_ID, so
 `ros2 topic echo /generation_summary` there follows the run.
@@ -39,6 +41,7 @@ from launch.actions import DeclareLaunchArgument
 from launch.actions import EmitEvent
 from launch.actions import OpaqueFunction
 from launch.actions import RegisterEventHandler
+from launch.actions import TimerAction
 from launch.event_handlers import OnProcessExit
 from launch.events import Shutdown
 from launch_ros.actions import Node
@@ -59,6 +62,7 @@ ARGUMENTS = {  # name: (default, description)
 }
 # launch argument -> the optimizer parameter it sets when given other than its default
 OPTIMIZER_ARGUMENTS = ('task_file', 'seed', 'engine', 'iterations', 'population', 'world_states')
+ROBOT_VIEW_WAIT = 30.0  # s, as ros.runner's
 WHOLE_NUMBERS = {'evaluators': 0, 'seed': -1, 'iterations': 0, 'population': 0,
                  'world_states': 0, 'live_port': 0}   # name: the least value
 
@@ -118,11 +122,27 @@ def run_nodes(context):
                          **chosen}])
     live = [Node(package=PACKAGE, executable='live_view', output='screen',
                  parameters=[{'port': given['live_port']}])] if given['live'] else []
-    # the run is over when the optimizer ends: stop the others (the recorder closes the bag)
-    finished = RegisterEventHandler(OnProcessExit(
-        target_action=optimizer,
-        on_exit=[EmitEvent(event=Shutdown(reason='the optimizer finished'))]))
-    return [recorder, *pool, *live, optimizer, finished]
+    robot_view = Node(package=PACKAGE, executable='robot_view', output='screen',
+                      parameters=files('robot_view', given))
+    # the run is over when the optimizer ends and the robot view has played the final best
+    # design's rollout into the bag (at most ROBOT_VIEW_WAIT s later): stop the others then
+    # (the recorder closes the bag)
+    finished = RegisterEventHandler(OnProcessExit(target_action=optimizer, on_exit=after_run))
+    played = RegisterEventHandler(OnProcessExit(target_action=robot_view, on_exit=after_view))
+    return [recorder, *pool, *live, robot_view, optimizer, finished, played]
+
+
+def after_run(event, context):
+    """Return what follows the optimizer's end: shut down, at once if it failed."""
+    shutdown = EmitEvent(event=Shutdown(reason='the optimizer finished'))
+    return [shutdown] if event.returncode else [TimerAction(period=ROBOT_VIEW_WAIT,
+                                                            actions=[shutdown])]
+
+
+def after_view(event, context):
+    """Return what follows the robot view's end: shut down once it played the final design."""
+    return [] if event.returncode else [EmitEvent(event=Shutdown(
+        reason="the final best design's rollout has played"))]
 
 
 def generate_launch_description():

@@ -14,7 +14,7 @@ import sys
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-EXECUTABLES = ['optimizer', 'evaluator', 'recorder', 'live_view', 'codesign']
+EXECUTABLES = ['optimizer', 'evaluator', 'recorder', 'live_view', 'robot_view', 'codesign']
 
 
 @pytest.fixture(scope='module')
@@ -112,7 +112,7 @@ def test_installed_executable_runs(workspace):
 def test_the_launch_file_and_what_it_names_are_installed(workspace):
     share = workspace / 'hand_codesign' / 'share' / 'hand_codesign'
     assert (share / 'launch' / 'codesign.launch.py').is_file()
-    for name in ('recorder', 'evaluator', 'optimizer'):   # what test_launch.py finds in it
+    for name in ('recorder', 'evaluator', 'optimizer', 'robot_view'):   # test_launch.py's
         assert (share / 'config' / f'{name}.yaml').is_file()
 
 

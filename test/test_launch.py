@@ -25,7 +25,7 @@ LAUNCH_FILE = ROOT / 'launch' / 'codesign.launch.py'
 STAND_INS = {
     'launch': ['LaunchDescription'],
     'launch.actions': ['DeclareLaunchArgument', 'EmitEvent', 'OpaqueFunction',
-                       'RegisterEventHandler'],
+                       'RegisterEventHandler', 'TimerAction'],
     'launch.event_handlers': ['OnProcessExit'],
     'launch.events': ['Shutdown'],
     'launch_ros': [],
@@ -102,7 +102,7 @@ def test_every_executable_parameter_and_file_it_names_exists(launch_file, tmp_pa
     mine = tmp_path / 'mine.yaml'
     mine.write_text('{}\n')
     found = nodes(launch_file, live='true', params_file=str(mine), population='8')
-    assert sorted(found) == ['evaluator', 'live_view', 'optimizer', 'recorder']
+    assert sorted(found) == ['evaluator', 'live_view', 'optimizer', 'recorder', 'robot_view']
     for executable, calls in found.items():
         table = parameter_table(executable)
         for files, values in calls:
@@ -116,7 +116,7 @@ def test_every_executable_parameter_and_file_it_names_exists(launch_file, tmp_pa
 
 def test_by_default_the_parameter_files_decide(launch_file):
     found = nodes(launch_file)
-    assert sorted(found) == ['evaluator', 'optimizer', 'recorder']
+    assert sorted(found) == ['evaluator', 'optimizer', 'recorder', 'robot_view']
     assert len(found['evaluator']) == 2
     (files, values), = found['optimizer']
     assert [pathlib.Path(path).name for path in files] == ['optimizer.yaml']

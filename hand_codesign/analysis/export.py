@@ -10,7 +10,8 @@ DIR receives:
 - `hand.urdf`: the hand (palm and capsule segments, joint origins, axes and limits, link
   friction), written by `core.sim.hand.hand_urdf` from the same link table the simulator builds.
   Standard URDF has no capsule (PyBullet reads one, yourdfpy and urdfdom do not), so each
-  capsule is written as what it is, a cylinder and a sphere at each end; the file loads in
+  capsule is written as what it is, a cylinder and a sphere at each end (the very text a run
+  publishes as robot_description: core.experiments.motion.design_urdf); the file loads in
   PyBullet, yourdfpy and other URDF tools (in PyBullet pass URDF_USE_IMPLICIT_CYLINDER, or it
   turns cylinders into meshes). URDF has no initial joint angles: they are in the YAML.
 - `hand.xml`: the same hand on the ground as MJCF, as core.sim.mujoco_sim builds it for MuJoCo
@@ -33,9 +34,9 @@ import pathlib
 from hand_codesign.analysis import records
 from hand_codesign.core.design import Design
 from hand_codesign.core.evaluate import evaluate_design
+from hand_codesign.core.experiments.motion import design_urdf
 from hand_codesign.core.run.runs import run_task
 from hand_codesign.core.sim.hand import hand_model
-from hand_codesign.core.sim.hand import hand_urdf
 from hand_codesign.core.task import parse_design
 from hand_codesign.core.task import TaskError
 from hand_codesign.core.task.genome import genome_spec
@@ -196,8 +197,7 @@ def export_design(record, recorded, out):
         out.mkdir(parents=True, exist_ok=True)
         urdf_path = out / URDF_NAME
         name = f'{task.name}_candidate{recorded.candidate_id}'
-        urdf_path.write_text(hand_urdf(design.hand, task.hand, name=name, capsules=False),
-                             encoding='utf-8')
+        urdf_path.write_text(design_urdf(task, design, name), encoding='utf-8')
         from hand_codesign.core.sim.mujoco_sim import model_mjcf  # see core.evaluate.new_simulator
         (out / MJCF_NAME).write_text(model_mjcf(
             model, task.time_step, model.base_position, model.base_orientation,

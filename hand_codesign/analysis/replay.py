@@ -25,7 +25,8 @@ from hand_codesign.arithmetic import NATIVE
 from hand_codesign.core.evaluate import evaluate
 from hand_codesign.core.evaluate import evaluate_design
 from hand_codesign.core.evaluate import new_simulator
-from hand_codesign.core.sim.geometry import link_frames
+from hand_codesign.core.experiments.motion import FRAMES_PER_SECOND as MOTION_FRAMES_PER_SECOND
+from hand_codesign.core.experiments.motion import rollout_motion
 from hand_codesign.core.sim.hand import hand_model
 from hand_codesign.core.sim.pybullet_sim import object_shape
 from hand_codesign.core.sim.pybullet_sim import Simulator
@@ -36,7 +37,7 @@ from hand_codesign.errors import UserError
 from hand_codesign.outputs import staged
 import numpy as np
 
-FRAMES_PER_SECOND = 25
+FRAMES_PER_SECOND = MOTION_FRAMES_PER_SECOND   # a robot model's /tf has the same frames
 IMAGE_SIZE = (480, 360)
 CAMERA_YAW = 0.0        # degrees: the camera looks along +y, across the fingers' x-z plane
 CAMERA_PITCH = -20.0
@@ -275,25 +276,11 @@ def rollout_poses(task, design, world):
     frames: [(time s, link frames, object pose)] at the animation's frame rate, poses as
     (position, quaternion xyzw) in the world frame, link frames as core.sim.hand's table places
     them (at the joints). A design starting in collision is not simulated: one frame shows the
-    start, the hand at its initial angles.
+    start, the hand at its initial angles (core.experiments.motion.rollout_motion).
     """
-    physical = genome_spec(task).decode(design.x)
-    model = hand_model(physical.hand, task.hand)
-    palm = (model.base_position, model.base_orientation)
-    frames = []
-
-    def grab(step, simulator):
-        position, orientation = simulator.object_pose()
-        frames.append((step * task.time_step, simulator.link_poses(),
-                       (tuple(position), tuple(orientation))))
-
-    with new_simulator(task.physics.engine) as simulator:
-        evaluate_design(physical, task, worlds=[world], simulator=simulator, on_frame=grab,
-                        frame_every=frame_every(task))
-    if not frames:
-        state = object_state(task, world)
-        frames.append((0.0, link_frames(model, palm), (state.position, state.orientation)))
-    return model, palm, frames
+    motion = rollout_motion(genome_spec(task).decode(design.x), task, world, FRAMES_PER_SECOND)
+    return motion.model, motion.palm, list(zip(motion.times, motion.link_poses,
+                                               motion.object_poses))
 
 
 def render_gif(path, task, design, world, view=None):

@@ -61,7 +61,18 @@ TOPIC_TYPES = {**LOOP_TOPIC_TYPES, **RIG_TOPIC_TYPES}
 BEST_DESIGN = 'best_design'
 MARKER_ARRAY_TYPE = 'visualization_msgs/msg/MarkerArray'
 WORLD_FRAME = 'world'
-VIEW_TOPIC_TYPES = {BEST_DESIGN: MARKER_ARRAY_TYPE}
+# The best design as a robot model (ros.robot_view_node): its URDF on ROBOT_DESCRIPTION
+# (latched, again on each new best design), the palm fixed in WORLD_FRAME on TF_STATIC and
+# every joint's transform, frame by frame over its rollout in world 0, on TF: what RViz's
+# RobotModel and Foxglove's URDF layer need, with no robot_state_publisher.
+ROBOT_DESCRIPTION = 'robot_description'
+TF = 'tf'
+TF_STATIC = 'tf_static'
+STRING_TYPE = 'std_msgs/msg/String'
+TF_MESSAGE_TYPE = 'tf2_msgs/msg/TFMessage'
+ROBOT_TOPIC_TYPES = {ROBOT_DESCRIPTION: STRING_TYPE, TF_STATIC: TF_MESSAGE_TYPE,
+                     TF: TF_MESSAGE_TYPE}
+VIEW_TOPIC_TYPES = {BEST_DESIGN: MARKER_ARRAY_TYPE, **ROBOT_TOPIC_TYPES}
 # every topic a run's recorder writes to its bag (and a live view forwards)
 RECORDED_TOPIC_TYPES = {**TOPIC_TYPES, **VIEW_TOPIC_TYPES}
 
@@ -70,7 +81,10 @@ RECORDED_TOPIC_TYPES = {**TOPIC_TYPES, **VIEW_TOPIC_TYPES}
 REPLAY_MARKERS = 'replay/markers'
 REPLAY_GOAL = 'replay/goal_pose'
 POSE_STAMPED_TYPE = 'geometry_msgs/msg/PoseStamped'
-REPLAY_TOPIC_TYPES = {REPLAY_MARKERS: MARKER_ARRAY_TYPE, REPLAY_GOAL: POSE_STAMPED_TYPE}
+# With them, the hand as a robot model (ROBOT_TOPIC_TYPES): its URDF and the palm once, at the
+# start, and the joints' transforms at every frame.
+REPLAY_TOPIC_TYPES = {REPLAY_MARKERS: MARKER_ARRAY_TYPE, REPLAY_GOAL: POSE_STAMPED_TYPE,
+                      **ROBOT_TOPIC_TYPES}
 
 # Evaluation.status (the constants of Evaluation.msg)
 STATUS_OK = 0
@@ -86,6 +100,9 @@ TRIAL_FAILED = 3
 # The recorder logs a line starting with this once its subscriptions exist; a runner waits
 # for it before starting the optimizer.
 RECORDER_READY = 'recorder ready'
+# The robot view logs this once it listens; a runner starts the optimizer only then, so the
+# robot view hears the run's final best design even when the run is short.
+ROBOT_VIEW_READY = 'robot view ready'
 # The live view (`hand-codesign run --live`) logs this, then ': ws://HOST:PORT', once it serves.
 LIVE_READY = 'live view ready'
 

@@ -1,6 +1,7 @@
 """Conversions between hand_codesign.core objects and messages (ours, and standard ones)."""
 
 from geometry_msgs.msg import Point
+from geometry_msgs.msg import TransformStamped
 from hand_codesign.core.contract import WORLD_FRAME
 from hand_codesign_msgs.msg import Candidate
 from hand_codesign_msgs.msg import Evaluation
@@ -8,6 +9,8 @@ from hand_codesign_msgs.msg import GenerationSummary
 from hand_codesign_msgs.msg import TrialRequest
 import numpy as np
 from std_msgs.msg import ColorRGBA
+from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker
 from visualization_msgs.msg import MarkerArray
 
@@ -153,3 +156,27 @@ def trial_request(candidate, evaluator_id, trial_id, spec):
         object_position=list(spec.position), object_orientation=list(spec.orientation),
         object_mass=float(spec.mass), object_friction=float(spec.friction),
         duration=float(spec.duration))
+
+
+def robot_description_message(urdf):
+    """Return the std_msgs/String of a robot_description topic: the URDF text."""
+    return String(data=urdf)
+
+
+def tf_message(transforms, stamp):
+    """
+    Return the tf2_msgs/TFMessage of (parent frame, child frame, (translation, quaternion)).
+
+    Each becomes a TransformStamped: the child frame's pose in its parent's, as tf2 and
+    robot_state_publisher publish them (core.sim.geometry.joint_transforms).
+    """
+    message = TFMessage()
+    for parent, child, (translation, rotation) in transforms:
+        transform = TransformStamped(child_frame_id=child)
+        transform.header.frame_id = parent
+        transform.header.stamp = stamp
+        moved, turned = transform.transform.translation, transform.transform.rotation
+        moved.x, moved.y, moved.z = (float(v) for v in translation)
+        turned.x, turned.y, turned.z, turned.w = (float(v) for v in rotation)
+        message.transforms.append(transform)
+    return message

@@ -1,8 +1,9 @@
 """
 The live view node: serves a run's topics to Foxglove over its WebSocket protocol, as they come.
 
-It subscribes to every topic a run records (the loop's and the best design's markers) without
-decoding (raw CDR) and logs each message on a channel of the Foxglove SDK's server
+It subscribes to every topic a run records (the loop's, the best design's markers, the robot
+view's robot_description, tf_static and tf) without decoding (raw CDR) and logs each message
+on a channel of the Foxglove SDK's server
 (`foxglove-sdk`) with the schema the bag holds: the type's ros2msg definition with its
 dependencies, message encoding cdr. So Foxglove (or Lichtblick) decodes the live run exactly
 like its bag, and the same layout (config/foxglove_layout.json) shows both. A client that

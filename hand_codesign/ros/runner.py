@@ -11,7 +11,9 @@ While the optimizer runs, the recorder and the evaluators are supervised: when o
 core.run.supervision.Supervisor decides whether it is started again (a restarted recorder continues
 the bag in its next file, a restarted evaluator serves under a new id and a unique node name)
 or whether the run gives up and stops cleanly; this module only starts and stops processes.
-A live view for Foxglove (`--live`) and a rig's nodes (`--rig`) run beside them, unsupervised.
+A live view for Foxglove (`--live`), a rig's nodes (`--rig`) and the robot view (the best design
+as robot_description and /tf, ros.robot_view_node) run beside them, unsupervised; a finished
+run lets the robot view play the final best design's rollout before the recorder stops.
 
 Evaluators on other hosts can join a run: start them with the run's ROS_DOMAIN_ID (printed at
 the start) and a discovery range that reaches this host, e.g.
@@ -37,6 +39,7 @@ import time
 from hand_codesign.core.contract import EVALUATORS_READY
 from hand_codesign.core.contract import LIVE_READY
 from hand_codesign.core.contract import RECORDER_READY
+from hand_codesign.core.contract import ROBOT_VIEW_READY
 from hand_codesign.core.run.signing import CREDENTIAL_VARIABLE
 from hand_codesign.core.run.signing import SECRET_VARIABLE
 from hand_codesign.core.run.summary import PROGRESS_PREFIX
@@ -51,6 +54,9 @@ from hand_codesign.ros.lifeline import runner_environment
 DOMAIN_IDS = range(1, 101)   # those a free pick (--domain-id auto) takes
 MAX_DOMAIN_ID = 232   # the highest ROS_DOMAIN_ID ROS 2 accepts
 STOP_TIMEOUT = 30.0
+# s a finished run waits for the robot view to play its final best design's rollout (a rollout
+# lasts a few simulated seconds, played in real time)
+ROBOT_VIEW_WAIT = 30.0
 
 
 @contextlib.contextmanager
@@ -87,7 +93,7 @@ class System:
         """
         self.bag = bag
         self.live = live
-        self.live_view = None
+        self.live_view = self.robot_view = None
         self.quiet = quiet
         self.progress = None if progress_every is None else ProgressThrottle(progress_every)
         self.keys = keys  # core.run.signing.RunKeys, or None for an unsigned run
@@ -155,6 +161,7 @@ class System:
         # every process logs into the bag folder from its start; the recorder writes beside
         (self.bag / 'logs').mkdir(parents=True, exist_ok=True)
         self.recorder = self.spawn_recorder()  # it finds a discovery server started later
+        self.robot_view = self.spawn_robot_view()
         if self.live is not None:
             self.live_view = self.spawn_live_view()
         if self.discovery is not None:
@@ -167,6 +174,8 @@ class System:
             self.start_optimizer(optimizer_module, dict(optimizer_parameters, start_signal=True))
         # the processes above start side by side; the optimizer sends once the recorder records
         self.wait_until_ready(self.recorder, RECORDER_READY, 'the recorder')
+        self.wait_until_ready(self.robot_view, ROBOT_VIEW_READY, 'the robot view',
+                              self.bag / 'logs' / 'robot_view.log')
         if self.live_view is not None:
             self.announce_live_view()
         if start_signal:
@@ -177,6 +186,8 @@ class System:
             self.start_optimizer(optimizer_module, optimizer_parameters)
         code = self.supervise()
         self.relay.join(timeout=5.0)
+        if code == 0:
+            self.wait_for_robot_view()
         self.stop_all()
         return code
 
@@ -225,6 +236,16 @@ class System:
         return self.node('hand_codesign.ros.recorder_node', parameters,
                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
+    def spawn_robot_view(self):
+        """Return the robot view (ros.robot_view_node): the best design as a robot model."""
+        return self.node('hand_codesign.ros.robot_view_node', {}, stdout=subprocess.PIPE,
+                         stderr=subprocess.STDOUT, text=True)
+
+    def wait_for_robot_view(self):
+        """Let the robot view play the final best design's rollout into the bag, then end."""
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self.robot_view.wait(timeout=ROBOT_VIEW_WAIT)
+
     def spawn_live_view(self):
         host, port = self.live
         return self.node('hand_codesign.ros.live_node', {'host': host, 'port': port},
@@ -237,8 +258,12 @@ class System:
         self.say(f'live: {address} (in Foxglove: Open connection, Foxglove WebSocket; layout '
                  'config/foxglove_layout.json)')
 
-    def wait_until_ready(self, process, ready, what):
-        """Return the line of a starting process that says `ready`; then drain its output."""
+    def wait_until_ready(self, process, ready, what, log=None):
+        """
+        Return the line of a starting process that says `ready`; then drain its output.
+
+        log: a file that gets the process's output (else it is dropped once ready).
+        """
         deadline = time.monotonic() + 60.0
         lines = []
         for line in process.stdout:
@@ -248,7 +273,8 @@ class System:
         if process.poll() is not None or not lines or ready not in lines[-1]:
             self.stop_all()
             raise UserError(f'{what} did not start:\n' + ''.join(lines[-20:]))
-        threading.Thread(target=process.stdout.read, daemon=True).start()
+        threading.Thread(target=process.stdout.read if log is None else
+                         lambda: copy_output(process.stdout, lines, log), daemon=True).start()
         return lines[-1]
 
     def relay_optimizer(self):
@@ -298,7 +324,8 @@ class System:
 
     def stop_all(self):
         """Stop optimizer and evaluators first, the recorder last: it takes what is in flight."""
-        stop([self.optimizer] + list(self.evaluators.values()) + self.rig_nodes)
+        stop([self.optimizer, self.robot_view] + list(self.evaluators.values())
+             + self.rig_nodes)
         stop([self.recorder, self.live_view])
         if self.discovery is not None:
             self.discovery.stop()
@@ -317,6 +344,15 @@ class ProgressThrottle:
             return False
         self.last = now
         return True
+
+
+def copy_output(stream, lines, path):
+    """Write lines already read, then the rest of a process's output stream, to path."""
+    with open(path, 'w') as log:
+        log.writelines(lines)
+        for line in stream:
+            log.write(line)
+            log.flush()
 
 
 def stop(processes):

@@ -19,7 +19,10 @@ from hand_codesign.core.contract import EVALUATIONS
 from hand_codesign.core.contract import EVALUATOR_STATUS
 from hand_codesign.core.contract import GENERATION_SUMMARY
 from hand_codesign.core.contract import OBJECT_POSE
+from hand_codesign.core.contract import ROBOT_DESCRIPTION
 from hand_codesign.core.contract import RUN_INFO
+from hand_codesign.core.contract import TF
+from hand_codesign.core.contract import TF_STATIC
 from hand_codesign.core.contract import TRIAL_REQUESTS
 from hand_codesign.core.contract import TRIAL_STATUS
 from hand_codesign_msgs.msg import Candidate
@@ -34,6 +37,8 @@ from rclpy.qos import DurabilityPolicy
 from rclpy.qos import HistoryPolicy
 from rclpy.qos import QoSProfile
 from rclpy.qos import ReliabilityPolicy
+from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
 # Deep enough for several generations of the largest population of Table I (250).
@@ -63,6 +68,21 @@ RIG_QOS = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )
 
+# The robot model, as robot_state_publisher and tf2 offer it: the description and the static
+# transforms latched (only the last one matters), the moving transforms a plain stream.
+LATCHED_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+TF_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=100,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+
 MESSAGE_TYPES = {
     RUN_INFO: RunInfo,
     CANDIDATES: Candidate,
@@ -75,7 +95,8 @@ MESSAGE_TYPES = {
 }
 
 # What a 3D viewer draws (core.contract.VIEW_TOPIC_TYPES), and every topic a bag records.
-VIEW_MESSAGE_TYPES = {BEST_DESIGN: MarkerArray}
+VIEW_MESSAGE_TYPES = {BEST_DESIGN: MarkerArray, ROBOT_DESCRIPTION: String,
+                      TF_STATIC: TFMessage, TF: TFMessage}
 RECORDED_MESSAGE_TYPES = {**MESSAGE_TYPES, **VIEW_MESSAGE_TYPES}
 # what the optimizer node publishes
 OPTIMIZER_TOPICS = (RUN_INFO, CANDIDATES, GENERATION_SUMMARY, BEST_DESIGN)
@@ -88,6 +109,9 @@ QOS = {
     GENERATION_SUMMARY: LOOP_QOS,
     # one per summary, like the summaries: a late viewer or recorder gets them all
     BEST_DESIGN: LOOP_QOS,
+    ROBOT_DESCRIPTION: LATCHED_QOS,
+    TF_STATIC: LATCHED_QOS,
+    TF: TF_QOS,
     TRIAL_REQUESTS: RIG_QOS,
     TRIAL_STATUS: RIG_QOS,
     OBJECT_POSE: RIG_QOS,

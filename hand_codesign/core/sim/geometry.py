@@ -14,10 +14,12 @@ visualization_msgs/Marker messages.
   goal pose (a goal without a position keeps the start position, one without an orientation
   keeps the start orientation).
 
-Link frames come either from forward kinematics at the initial joint angles
-(`link_frames`, the hand as designed, before any motion) or from a simulation (replay), so a
-rollout is drawn with the very shapes of the design. Poses are (position xyz, quaternion
-xyzw), sizes are the full extents along the shape's own axes (a cylinder's axis is its z).
+Link frames come either from forward kinematics at the initial joint angles (`link_frames`,
+the hand as designed, before any motion) or from a simulation (replay), so a rollout is drawn
+with the very shapes of the design. `joint_transforms` gives each joint's transform (parent
+link to child link) at some joint angles: the /tf of the hand as a robot model. Poses are
+(position xyz, quaternion xyzw), sizes are the full extents along the shape's own axes (a
+cylinder's axis is its z).
 """
 
 from dataclasses import dataclass
@@ -26,6 +28,7 @@ from typing import Tuple
 
 from hand_codesign.core.rotations import axis_angle_quaternion, compose, rotate
 from hand_codesign.core.sim.hand import hand_model
+from hand_codesign.core.sim.hand import PALM_LINK
 from hand_codesign.core.sim.objectives import goal_schedule
 from hand_codesign.core.sim.worlds import object_state
 from hand_codesign.core.sim.worlds import WorldState
@@ -74,6 +77,21 @@ def link_frames(model, base_pose, angles=None):
         frames.append(compose(parent, (link.joint_position,
                                        axis_angle_quaternion(link.joint_axis, angle))))
     return frames
+
+
+def joint_transforms(model, angles=None):
+    """
+    Return (parent link, child link, (translation, quaternion)) of every joint at `angles`.
+
+    Each is the pose of the child link's frame in its parent's, the joint's origin turned by
+    its angle about its axis: what robot_state_publisher computes from the hand's URDF
+    (core.sim.hand.model_urdf: link names, origins, axes) and a joint state. Composed from the
+    palm's pose down, they give `link_frames`. angles: default the initial ones.
+    """
+    angles = model.initial_angles if angles is None else angles
+    return [(PALM_LINK if link.parent < 0 else model.links[link.parent].name, link.name,
+             (tuple(link.joint_position), axis_angle_quaternion(link.joint_axis, float(angle))))
+            for link, angle in zip(model.links, angles)]
 
 
 def hand_shapes(model, base_pose, frames):

@@ -31,6 +31,8 @@ _CAPSULE_ORIENTATION = (-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))
 _CAPSULE_RPY = (-math.pi / 2, 0.0, 0.0)
 
 
+# The root link of the URDF: the palm, fixed to the world at the task's hand base pose.
+PALM_LINK = 'palm'
 # The URDF effort limit; the simulated torques are whatever the policy asks for.
 MAX_JOINT_FORCE = 1000.0
 
@@ -171,7 +173,7 @@ def _palm_xml(model):
                model.palm_mass * (sx ** 2 + sz ** 2) / 12,
                model.palm_mass * (sx ** 2 + sy ** 2) / 12)
     geometry = f'<box size="{_vector(model.palm_size)}"/>'
-    return ('  <link name="palm">\n' + _contact_xml(model.friction)
+    return (f'  <link name={quoteattr(PALM_LINK)}>\n' + _contact_xml(model.friction)
             + _inertial_xml(model.palm_mass, (0, 0, 0), inertia)
             + f'    <visual>\n      <geometry>{geometry}</geometry>\n    </visual>\n'
             + f'    <collision>\n      <geometry>{geometry}</geometry>\n    </collision>\n'
@@ -197,7 +199,7 @@ def _capsule_xml(link, element, capsules):
 
 
 def _segment_xml(model, link, capsules):
-    parent = 'palm' if link.parent < 0 else model.links[link.parent].name
+    parent = PALM_LINK if link.parent < 0 else model.links[link.parent].name
     if link.lower_limit is None:
         joint_type, limit = 'continuous', ''
     else:
