@@ -51,7 +51,7 @@ def test_the_task_reads_a_list_of_engines_and_engine_alone_as_before():
 
 
 @pytest.mark.parametrize('physics, message', [
-    ({'engines': ['pybullet', 'ode']}, "two.yaml: physics.engines: expected a non-empty list "
+    ({'engines': ['pybullet', 'ode']}, 'two.yaml: physics.engines: expected a non-empty list '
      "of distinct engines of pybullet, mujoco, e.g. [pybullet, mujoco], got ['pybullet', 'ode']"),
     ({'engines': []}, 'two.yaml: physics.engines: expected a non-empty list'),
     ({'engines': ['mujoco', 'mujoco']}, 'two.yaml: physics.engines: expected a non-empty list'),
@@ -176,5 +176,5 @@ def test_run_refuses_an_unknown_engine_in_one_line():
     refused = run_cli('run', '--task', TASK, '--engine', 'pybullet,ode')
     assert refused.returncode == 2
     assert refused.stderr.strip().splitlines()[-1].endswith(
-        "expected pybullet or mujoco, or several comma-separated, e.g. pybullet,mujoco; got "
+        'expected pybullet or mujoco, or several comma-separated, e.g. pybullet,mujoco; got '
         "'pybullet,ode'")

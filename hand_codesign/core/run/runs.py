@@ -5,8 +5,9 @@ A run records the task file's text as loaded and, apart from it, the values its 
 overrode (seed, budget, world states, physics engine: RunInfo.engine, with the engine's
 version in RunInfo.engine_version). A run in several engines (physics.engines) records them
 comma-separated in both, in the task's order: 'pybullet,mujoco' and
-'pybullet==3.2.7,mujoco==3.3.7'; a run in one engine records it as before. Every process that needs the run's task (evaluators,
-replay, analysis, resume) rebuilds it with `run_task`, so they all agree on it exactly.
+'pybullet==3.2.7,mujoco==4.0.0'; a run in one engine records it as before. Every process
+that needs the run's task (evaluators, replay, analysis, resume) rebuilds it with `run_task`,
+so they all agree on it exactly.
 """
 
 import functools
@@ -28,8 +29,9 @@ def run_task(task_yaml, source, seed, iterations, population, world_states, vari
     `world_states` are the run's overrides (RunInfo's fields); `variant`, a
     core.task.variant.Variant, makes it the version of the run's task a candidate is evaluated
     on (None: the run's task itself); `engine` is the run's physics engine ('pybullet' or
-    'mujoco', or several comma-separated: 'pybullet,mujoco'; '': the task file's). Raises TaskError (a ValueError) for a text or override
-    the task does not accept, ValueError for an unknown engine.
+    'mujoco', or several comma-separated: 'pybullet,mujoco'; '': the task file's). Raises
+    TaskError (a ValueError) for a text or override the task does not accept, ValueError for
+    an unknown engine.
     """
     return with_overrides(parse_task(task_yaml, source=source), seed, iterations, population,
                           world_states, variant, engine)

@@ -8,7 +8,8 @@ import math
 
 from hand_codesign.core.task.descriptors import default_descriptors, descriptor_ranges
 from hand_codesign.core.task.parts import (ALGORITHMS, ArchiveSpec, ENGINES,
-                                           MORPHOLOGY_PARAMETERS, QD_ALGORITHMS, RESTART_ALGORITHMS, resting_height,
+                                           MORPHOLOGY_PARAMETERS, QD_ALGORITHMS,
+                                           RESTART_ALGORITHMS, resting_height,
                                            RESTING_TOLERANCE, TaskError)
 import numpy as np
 
