@@ -4,7 +4,7 @@ Physics as a randomized quantity (issue 47): a task evaluated in both engines on
 The task file's `physics.engines` and `physics.engine_aggregate`, read and refused; an
 evaluation in both engines against its two single-engine evaluations (mean and worst); the
 evaluator's refusal of an engine it cannot import; a two-engine `hand-codesign run` end to end,
-its RunInfo listing both engines, bit-identical with 1 and 2 evaluators and after an evaluator
+its RunInfo listing both engines, its export re-simulated in both, bit-identical with 1 and 2 evaluators and after an evaluator
 is SIGKILLed; `analyze --unseen` reporting each engine, and `transfer` reading it.
 """
 
@@ -129,7 +129,8 @@ def two_engine_run(tmp_path_factory):
     return bag
 
 
-def test_a_two_engine_run_lists_both_engines_and_any_process_recomputes_it(two_engine_run):
+def test_a_two_engine_run_lists_both_engines_and_any_process_recomputes_it(two_engine_run,
+                                                                           tmp_path):
     record = read_run(two_engine_run)
     info = record.run_info
     assert info.engine == 'pybullet,mujoco'
@@ -142,6 +143,8 @@ def test_a_two_engine_run_lists_both_engines_and_any_process_recomputes_it(two_e
                   for index in range(len(record.candidates))
                   if record.candidates.row(index)['candidate_id'] == row['candidate_id'])
     np.testing.assert_array_equal(np.asarray(row['objectives']), evaluate(genome, task).objectives)
+    exported = run_cli('export', two_engine_run, '--out', tmp_path / 'export')
+    assert exported.returncode == 0, exported.stdout  # 0: re-simulated in both, same bits
 
 
 def test_a_two_engine_run_is_the_same_with_one_evaluator_and_after_a_kill(two_engine_run,
