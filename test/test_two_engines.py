@@ -4,8 +4,9 @@ Physics as a randomized quantity (issue 47): a task evaluated in both engines on
 The task file's `physics.engines` and `physics.engine_aggregate`, read and refused; an
 evaluation in both engines against its two single-engine evaluations (mean and worst); the
 evaluator's refusal of an engine it cannot import; a two-engine `hand-codesign run` end to end,
-its RunInfo listing both engines, its export re-simulated in both, bit-identical with 1 and 2 evaluators and after an evaluator
-is SIGKILLed; `analyze --unseen` reporting each engine, and `transfer` reading it.
+its RunInfo listing both engines, its export re-simulated in both, bit-identical with 1 and 2
+evaluators and after an evaluator is SIGKILLed; `analyze --unseen` reporting each engine, and
+`transfer` reading it.
 """
 
 import json
