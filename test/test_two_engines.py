@@ -17,6 +17,7 @@ from hand_codesign.bag.reader import read_run
 from hand_codesign.core.evaluate import across_engines, evaluate
 from hand_codesign.core.run import evaluation_jobs
 from hand_codesign.core.run.evaluation_jobs import CandidateRejected, check_engine
+from hand_codesign.core.run.preview import preview
 from hand_codesign.core.run.runs import engines_version
 from hand_codesign.core.task import parse_task, TaskError
 from hand_codesign.core.task.genome import genome_spec
@@ -96,6 +97,13 @@ def test_two_engines_score_the_aggregate_of_the_two_single_engine_evaluations(ag
     assert both.simulated_time == sum(e.simulated_time for e in each)
     again = across_engines(task, each)
     np.testing.assert_array_equal(again.objectives, both.objectives)
+
+
+def test_the_preview_counts_each_engine_s_rollouts():
+    one, both = (preview(task_with(physics)) for physics in ({}, {'engines': ['pybullet',
+                                                                           'mujoco']}))
+    assert both['steps_per_evaluation'] == 2 * one['steps_per_evaluation']
+    assert both['budget']['rollouts'] == 2 * one['budget']['rollouts']
 
 
 def test_engine_alone_evaluates_bit_identically_to_a_list_of_it():
