@@ -100,8 +100,8 @@ def test_two_engines_score_the_aggregate_of_the_two_single_engine_evaluations(ag
 
 
 def test_the_preview_counts_each_engine_s_rollouts():
-    one, both = (preview(task_with(physics)) for physics in ({}, {'engines': ['pybullet',
-                                                                           'mujoco']}))
+    two = {'engines': ['pybullet', 'mujoco']}
+    one, both = (preview(task_with(physics)) for physics in ({}, two))
     assert both['steps_per_evaluation'] == 2 * one['steps_per_evaluation']
     assert both['budget']['rollouts'] == 2 * one['budget']['rollouts']
 
