@@ -9,6 +9,7 @@ evaluators and after an evaluator is SIGKILLed; `analyze --unseen` reporting eac
 `transfer` reading it.
 """
 
+import dataclasses
 import json
 import pathlib
 
@@ -50,6 +51,9 @@ def test_the_task_reads_a_list_of_engines_and_engine_alone_as_before():
     alone = task_with({'engine': 'mujoco'})
     assert (alone.physics.engine, alone.physics.engines) == ('mujoco', ('mujoco',))
     assert task_with({}).physics.engines == ('pybullet',)
+    # code that sets engine alone, as before the list, gets that one engine
+    assert dataclasses.replace(task.physics, engine='mujoco').engines == ('mujoco',)
+    assert dataclasses.replace(alone.physics, engine='pybullet').engines == ('pybullet',)
 
 
 @pytest.mark.parametrize('physics, message', [

@@ -351,7 +351,10 @@ class PhysicsSpec:
         'worse engine', 'choice', choices=ENGINE_AGGREGATES, default='mean')
 
     def __post_init__(self):
-        if not self.engines:  # one engine: the list of it
+        # one engine: the list of it. An `engine` that is not the list's first (code that sets
+        # engine alone, as before the list: dataclasses.replace(physics, engine=...)) makes
+        # the physics of that one engine.
+        if len(self.engines) <= 1 or self.engine != self.engines[0]:
             object.__setattr__(self, 'engines', (self.engine,))
 
     def with_engines(self, engines):
