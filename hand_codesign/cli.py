@@ -13,6 +13,8 @@ from hand_codesign.deprecation import show_old_names, warn_old_name
 from hand_codesign.errors import closed_stdout_status, UserError
 from hand_codesign.version import version_text
 
+ENGINE_NAMES = ('pybullet', 'mujoco')  # core.task.parts.ENGINES (cli imports no core module)
+
 # verb -> (module, function, one-line help); the function takes the parsed arguments.
 VERBS = {
     'check': ('hand_codesign.commands.check', 'check_command',
@@ -81,6 +83,17 @@ def domain_id_option(text):
     return int(text)
 
 
+def engines_option(text):
+    """Return --engine's value: an engine, or several comma-separated (pybullet,mujoco)."""
+    names = text.split(',')
+    if not names or any(name not in ENGINE_NAMES for name in names) \
+            or len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(
+            f'expected {" or ".join(ENGINE_NAMES)}, or several comma-separated, e.g. '
+            f'{",".join(ENGINE_NAMES)}; got {text!r}')
+    return text
+
+
 def seconds_option(text):
     """Return a duration option's value: seconds, a number of at least 0."""
     try:
@@ -141,8 +154,9 @@ def add_run_arguments(parser):
     parser.add_argument('--bag', help='where to write the bag, a new folder (default '
                                       'bags/<task>-<date>-<time>)')
     add_budget_arguments(parser)
-    parser.add_argument('--engine', choices=('pybullet', 'mujoco'),
-                        help="physics engine (default: the task file's physics.engine)")
+    parser.add_argument('--engine', type=engines_option, metavar='ENGINE[,ENGINE]',
+                        help='physics engine, or engines every candidate meets the same worlds '
+                             "in, e.g. pybullet,mujoco (default: the task file's physics)")
     parser.add_argument('--resume', metavar='BAG',
                         help='continue the run recorded in BAG (with --iterations N: a '
                              'finished one, on to N generations; default: a new run)')

@@ -178,7 +178,8 @@ def export_design(record, recorded, out):
         'urdf': URDF_NAME,
         'controller': controller_document(task, design, joint_names),
         'design': design_document(design),
-        'task': {'name': task.name, 'engine': task.physics.engine,
+        # its engines, comma-separated as RunInfo.engine (core.run.runs): 'pybullet,mujoco'
+        'task': {'name': task.name, 'engine': ','.join(task.physics.engines),
                  'seed': int(task.seed), 'iterations': task.iterations,
                  'population': task.population, 'world_states': task.num_world_states,
                  'structure': [int(joints) for joints in task.structure],

@@ -11,6 +11,10 @@ shares of each engine's runs (every run has the same number of worlds: the poole
 missing RUN-in-pybullet.json: its summary, measured on the same unseen worlds, is copied to
 FOLDER/RUN-in-pybullet.json (small), so the table is then rewritten from FOLDER alone.
 
+A run found in both engines (physics.engines, issue 47) is measured in both by one `analyze BAG
+--unseen N`, whose unseen.json holds each engine's record: FOLDER/RUN-in-both.json. Its row is
+found in "both"; "there" is PyBullet and "the other engine" MuJoCo.
+
 Usage: hand-codesign transfer FOLDER --title TEXT [--note TEXT] [--measures DIR ...]
 """
 
@@ -21,7 +25,8 @@ import pathlib
 from hand_codesign.errors import UserError
 
 ENGINES = ('pybullet', 'mujoco')
-NAMES = {'pybullet': 'PyBullet', 'mujoco': 'MuJoCo'}
+BOTH = 'both'  # a run found in both engines (physics.engines)
+NAMES = {'pybullet': 'PyBullet', 'mujoco': 'MuJoCo', BOTH: 'both'}
 COLUMNS = ['run', 'found_in', 'worlds', 'tolerance', 'within_found', 'within_other',
            'median_found', 'median_other', 'p90_found', 'p90_other', 'joint_limits_found',
            'joint_limits_other']
@@ -47,9 +52,14 @@ def read_runs(folder):
     runs = {}
     for path in sorted(folder.glob('*-in-*.json')):
         run, engine = path.stem.rsplit('-in-', 1)
+        measured = json.loads(path.read_text())
+        if engine == BOTH and set(measured.get('engines', ())) == set(ENGINES):
+            runs.setdefault(run, {}).update(measured['engines'])
+            continue
         if engine not in ENGINES:
-            raise UserError(f'{path}: expected RUN-in-pybullet.json or RUN-in-mujoco.json')
-        runs.setdefault(run, {})[engine] = json.loads(path.read_text())
+            raise UserError(f'{path}: expected RUN-in-pybullet.json, RUN-in-mujoco.json or '
+                            'RUN-in-both.json (of a run in both engines)')
+        runs.setdefault(run, {})[engine] = measured
     return runs
 
 
@@ -78,8 +88,12 @@ def rows_of(runs):
         if set(measured) != set(ENGINES):
             raise UserError(f'{run}: measured in {sorted(measured)} only, expected both')
         found = measured['mujoco']['run_engine']
-        other = 'mujoco' if found == 'pybullet' else 'pybullet'
-        home, away = measured[found]['summaries'][0], measured[other]['summaries'][0]
+        if found in ENGINES:
+            other = 'mujoco' if found == 'pybullet' else 'pybullet'
+            home, away = measured[found]['summaries'][0], measured[other]['summaries'][0]
+        else:  # found in both: PyBullet "there", MuJoCo "in the other engine"
+            found = BOTH
+            home, away = (measured[engine]['summaries'][0] for engine in ENGINES)
         if home['worlds'] != away['worlds'] or home['tolerance'] != away['tolerance']:
             raise UserError(f'{run}: the two engines measured different worlds or tolerances')
         rows.append({'run': run, 'found_in': found, 'worlds': home['worlds'],
@@ -90,7 +104,7 @@ def rows_of(runs):
                      'joint_limits_found': home['joint_limits_found'],
                      'joint_limits_other': away['joint_limits_found'],
                      '_tolerance': home['tolerance']})
-    return sorted(rows, key=lambda row: (ENGINES.index(row['found_in']), row['run']))
+    return sorted(rows, key=lambda row: ((*ENGINES, BOTH).index(row['found_in']), row['run']))
 
 
 def markdown(rows, title, note):
@@ -111,7 +125,7 @@ def markdown(rows, title, note):
             f"{value_text(row['p90_other'], tolerance)} | "
             f"{'yes' if row['joint_limits_found'] else 'no'} / "
             f"{'yes' if row['joint_limits_other'] else 'no'} |")
-    for engine in ENGINES:
+    for engine in (*ENGINES, BOTH):
         group = [row for row in rows if row['found_in'] == engine]
         if group:
             home = sum(row['within_found'] for row in group) / len(group)
@@ -120,8 +134,9 @@ def markdown(rows, title, note):
                          f'{away:.0%} | | | | | |')
     tolerances = sorted({row['tolerance'] for row in rows})
     lines += ['', f"Within: the share of each run's {rows[0]['worlds']} unseen worlds that end "
-              f"with {' / '.join(tolerances)}; \"there\": in the engine the run was found in.",
-              '']
+              f"with {' / '.join(tolerances)}; \"there\": in the engine the run was found in"
+              + (' (found in both: there is PyBullet, the other engine MuJoCo).'
+                 if any(row['found_in'] == BOTH for row in rows) else '.'), '']
     return '\n'.join(lines)
 
 

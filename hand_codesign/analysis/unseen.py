@@ -14,7 +14,7 @@ from hand_codesign.analysis.tables import error_text, percent
 from hand_codesign.core.experiments.measures import (ALONG_X_5MM, ALONG_Y_5MM, measure_worlds,
                                                      ORIENTATION_01, PLANE_5MM, POSE,
                                                      POSITION_5MM, shares_in_bands, summarize,
-                                                     unseen_world_states)
+                                                     Tolerance, unseen_world_states)
 from hand_codesign.core.experiments.robustness import world_values
 from hand_codesign.core.sim.worlds import QUANTITIES
 import numpy as np
@@ -116,7 +116,10 @@ def unseen_report(bag, count, processes=1, engine=None):
     Return (Markdown lines, JSON record) of a run's best design on `count` unseen worlds.
 
     `engine` ('pybullet' or 'mujoco') measures it in that physics engine instead of the run's
-    (a design's transfer to the other engine).
+    (a design's transfer to the other engine). A run in several engines (physics.engines) is
+    measured in each of them on the same worlds: a table of the share within each tolerance
+    per engine, then each engine's report; its record is {'bag', 'seed', 'unseen_worlds',
+    'run_engine', 'engines': {engine: that engine's record}}.
 
     The same measures as a reproduce campaign's: for each error of the task's goals
     (unseen_tolerances) the share of worlds within 5 mm or 0.1 rad, its median and p90, and
@@ -124,9 +127,30 @@ def unseen_report(bag, count, processes=1, engine=None):
     score.
     """
     task, x, structure = final_design(bag)
-    found_in = task.physics.engine
-    if engine:
-        task = task.replace(physics=dataclasses.replace(task.physics, engine=engine))
+    found_in = ','.join(task.physics.engines)
+    engines = (engine,) if engine else task.physics.engines
+    reports = [engine_report(bag, task.replace(physics=task.physics.with_engines((name,))), x,
+                             structure, count, processes, found_in) for name in engines]
+    if len(reports) == 1:
+        return reports[0]
+    lines = [f'## On {count} unseen worlds, in each engine of the run', '',
+             f'The best design (structure {list(structure)}) on the same {count} unseen worlds '
+             f'in each engine the run evaluated in ({", ".join(engines)}):', '',
+             '| error | ' + ' | '.join(f'within, {name}' for name in engines) + ' |',
+             '|---|' + '---|' * len(engines)]
+    records = {name: record for name, (_, record) in zip(engines, reports)}
+    for index, summary in enumerate(reports[0][1]['summaries']):
+        lines.append(f"| {Tolerance(**summary['tolerance']).describe()} | " + ' | '.join(
+            percent(records[name]['summaries'][index]['within']) for name in engines) + ' |')
+    lines.append('')
+    for name, (part, _) in zip(engines, reports):
+        lines += [f'#{part[0]}, in {name}'] + part[1:]
+    return lines, {'bag': str(bag), 'seed': task.seed, 'unseen_worlds': count,
+                   'run_engine': found_in, 'engines': records}
+
+
+def engine_report(bag, task, x, structure, count, processes, found_in):
+    """Return unseen_report's (lines, record) of design x measured in task's one engine."""
     worlds = unseen_world_states(task, count)
     measures = measure_worlds(x, task, worlds, processes)
     summaries = [summarize(measures, tolerance) for tolerance in unseen_tolerances(task)]

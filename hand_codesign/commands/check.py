@@ -111,6 +111,12 @@ def header(summary):
     return '\n'.join(lines)
 
 
+def engines(summary):
+    """Return the text that names a task's engines when it has several, else ''."""
+    names = summary['settings'].get('physics.engines') or []
+    return f' x {len(names)} engines ({", ".join(names)})' if len(names) > 1 else ''
+
+
 def physics(summary):
     budget = summary['budget']
     rollout = summary['steps_per_rollout']
@@ -118,8 +124,8 @@ def physics(summary):
     lines = [wrap(f'physics steps: {rollout:,} per rollout ({step:g} s each, '
                   f'{summary["rollout_time"]:g} s: a rollout ends at the last goal; task '
                   f'duration {summary["duration"]:g} s)'),
-             f'  per evaluation: {budget["world_states"]} worlds x {rollout:,} = '
-             f'{summary["steps_per_evaluation"]:,}']
+             f'  per evaluation: {budget["world_states"]} worlds x {rollout:,}'
+             f'{engines(summary)} = {summary["steps_per_evaluation"]:,}']
     early = summary['early_termination']
     if early is None:
         lines.append('  no early termination: every rollout runs to its last goal unless its '

@@ -15,6 +15,7 @@ import signal
 import sys
 import time
 
+from hand_codesign.core.run.runs import engines_text
 from hand_codesign.core.run.runs import load_run_task
 from hand_codesign.core.run.signing import new_secret
 from hand_codesign.core.run.signing import RunKeys
@@ -164,7 +165,7 @@ def optimizer_parameters(arguments, task, bag):
         parameters.update({
             'task_file': pathlib.Path(arguments.task).resolve(), 'seed': task.seed,
             'iterations': task.iterations, 'population': task.population,
-            'world_states': task.num_world_states, 'engine': task.physics.engine})
+            'world_states': task.num_world_states, 'engine': engines_text(task)})
     return parameters
 
 

@@ -22,6 +22,11 @@ When the task's quality-diversity archive names outcome descriptors (core.outcom
 world's scene is also read once at the end of its rollout and the Evaluation carries their
 shares of the worlds (`outcome_names`, `outcomes`); a design that starts in collision has
 0 for each. Other tasks read nothing more.
+
+A task in several physics engines (`physics: {engines: [pybullet, mujoco]}`) evaluates each
+candidate on the same worlds in every engine and scores it by `physics.engine_aggregate`
+(across_engines): the mean of the engines' objectives, or per objective the worse engine's.
+Its per-world arrays stack the engines' rows, engine by engine.
 """
 
 from dataclasses import dataclass, field
@@ -50,7 +55,9 @@ class Evaluation:
     objectives: np.ndarray  # one per objective name: eq. (5) with the torque penalty
     objective_names: Tuple[str, ...]
     fitness: float  # weighted sum with task.objective_weights
-    world_objectives: np.ndarray  # (worlds, objectives): h_o of each world
+    # (worlds, objectives): h_o of each world; in several engines (engines * worlds, ...), the
+    # engines' rows stacked in physics.engines' order, as are the errors and poses below
+    world_objectives: np.ndarray
     collision: bool  # the design starts in collision: every objective is COLLISION_PENALTY
     unstable_worlds: int
     simulated_time: float  # s, summed over the worlds
@@ -174,13 +181,70 @@ def evaluate_design(design, task, worlds: Optional[Sequence] = None,
     `simulator` defaults to the process-wide one of the task's engine (physics.engine). For
     replay: `on_world(index, simulator)` is called before each world's rollout and
     `on_frame(step, simulator)` at its frames (see Simulator.rollout).
+
+    A task in several engines (physics.engines, issue 47) is evaluated on the same worlds in
+    each of them, in the list's order, and scored by `across_engines`; a `simulator` given
+    simulates in its own engine only.
     """
+    engines = task.physics.engines
+    if simulator is not None or len(engines) == 1:
+        return _evaluate_in(simulator or shared_simulator(task.physics.engine), design, task,
+                            worlds, on_frame, frame_every, on_world, share)
+    return across_engines(task, [
+        _evaluate_in(shared_simulator(engine), design, task, worlds, on_frame, frame_every,
+                     on_world, share) for engine in engines])
+
+
+def across_engines(task, evaluations):
+    """
+    Return the Evaluation of a candidate in several engines from its Evaluation in each.
+
+    Args:
+        task: the Task; physics.engine_aggregate chooses the objectives: 'mean', the mean of
+            the engines' objectives (each with the torque penalty, eq. 2), or 'worst', per
+            objective the largest (the worse engine's error, objective by objective, not the
+            engine of the worse fitness). A design that starts in collision in any engine
+            scores COLLISION_PENALTY in every objective and counts as a collision.
+        evaluations: Evaluations of one candidate on the same worlds, one per engine, in
+            task.physics.engines' order.
+
+    Returns:
+        an Evaluation whose fitness is that of its objectives, whose per-world arrays
+        (world_objectives, initial_errors, final_errors, final_poses) hold the engines' rows
+        stacked engine by engine (rows k * worlds to (k + 1) * worlds - 1: engine k), whose
+        unstable worlds and simulated time are summed and outcomes (shares) averaged.
+    """
+    each = np.array([evaluation.objectives for evaluation in evaluations])
+    collision = any(evaluation.collision for evaluation in evaluations)
+    if collision:
+        objectives = np.full(each.shape[1], COLLISION_PENALTY)
+    elif task.physics.engine_aggregate == 'worst':
+        objectives = each.max(axis=0)
+    else:
+        objectives = each.mean(axis=0)
+
+    def rows(name):
+        return np.concatenate([getattr(evaluation, name) for evaluation in evaluations])
+
+    first = evaluations[0]
+    outcomes = (np.mean([evaluation.outcomes for evaluation in evaluations], axis=0)
+                if len(first.outcomes) else first.outcomes)
+    return Evaluation(objectives=objectives, objective_names=first.objective_names,
+                      fitness=weighted_fitness(objectives, task.objective_weights),
+                      world_objectives=rows('world_objectives'), collision=collision,
+                      unstable_worlds=sum(e.unstable_worlds for e in evaluations),
+                      simulated_time=float(sum(e.simulated_time for e in evaluations)),
+                      initial_errors=rows('initial_errors'), final_errors=rows('final_errors'),
+                      final_poses=rows('final_poses'), outcome_names=first.outcome_names,
+                      outcomes=outcomes)
+
+
+def _evaluate_in(simulator, design, task, worlds, on_frame, frame_every, on_world, share):
+    """Return the Evaluation of a Design on `task` simulated by `simulator` (one engine)."""
     context = _TaskContext.of(task)
     every_state, every_initial = context.objects(worlds)
     first, end = (0, len(every_state)) if share is None else share
     states, initial = every_state[first:end], every_initial[first:end]
-    if simulator is None:
-        simulator = shared_simulator(task.physics.engine)
     schedule = context.schedule
     model = hand_model(design.hand, task.hand)
     policy = make_policy(task.policy, design.controller, model.initial_angles,

@@ -37,7 +37,7 @@ PARAMETERS = {
                    (0, 10**6)),
     'population': (0, "candidates per generation; 0 keeps the task file's", (0, 10**5)),
     'world_states': (0, "randomized worlds per candidate; 0 keeps the task file's", (0, 10**6)),
-    'engine': ('', "physics engine, pybullet or mujoco; empty keeps the task file's", None),
+    'engine': ('', "physics engines, e.g. pybullet,mujoco; empty keeps the task file's", None),
     'run_id': ('', 'id of the run; empty: made from the time and process id', None),
     'evaluators_expected': (1, 'evaluators to hear from before starting', (0, 10**4)),
     'subscribers_expected': (0, 'other subscribers (recorders) to wait for', (0, 100)),

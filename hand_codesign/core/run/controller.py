@@ -48,7 +48,7 @@ from hand_codesign.core.run.audits import Audits
 from hand_codesign.core.run.audits import DEFAULT_FRACTION
 from hand_codesign.core.run.dispatch import Dispatcher
 from hand_codesign.core.run.rounds import RaceRounds
-from hand_codesign.core.run.runs import engine_version, library_versions
+from hand_codesign.core.run.runs import engines_text, engines_version, library_versions
 from hand_codesign.core.run.summary import generation_summary
 from hand_codesign.core.run.summary import progress_line
 from hand_codesign.core.search.search import Search
@@ -114,8 +114,7 @@ class RunController:
             'population': task.population, 'world_states': task.num_world_states,
             'objective_names': list(task.objective_names), 'versions': library_versions(),
             'resumed_from': self.resumed.run_id if self.resumed is not None else '',
-            'engine': task.physics.engine,
-            'engine_version': engine_version(task.physics.engine)}
+            'engine': engines_text(task), 'engine_version': engines_version(engines_text(task))}
 
     def describe(self):
         """Return the line announcing the run."""

@@ -18,10 +18,11 @@ hold (a candidate's covers its run's RunInfo, so it waits for that) and counts t
 """
 
 import dataclasses
+import importlib.util
 import time
 from typing import Optional, Sequence, Tuple
 
-from hand_codesign.core.run.runs import engine_version, run_task
+from hand_codesign.core.run.runs import engine_names, engines_version, run_task
 from hand_codesign.core.run.signing import run_digest
 from hand_codesign.core.sim.worlds import world_states
 from hand_codesign.core.task.genome import genome_spec
@@ -68,12 +69,29 @@ def candidate_variant(candidate):
 
 
 def check_engine(run):
-    """Raise CandidateRejected if run's physics engine (RunInfo) is not this process's."""
+    """
+    Raise CandidateRejected if run's physics engines (RunInfo) are not this process's.
+
+    RunInfo.engine names them comma-separated and engine_version their versions in the same
+    order (core.run.runs); an evaluator that cannot import one of them, or has another version
+    of one, refuses the run in one line.
+    """
     engine = getattr(run, 'engine', '')  # '' from a sender older than the field
     wanted = getattr(run, 'engine_version', '')
-    if engine and wanted and engine_version(engine) != wanted:
+    if not engine:
+        return
+    try:
+        names = engine_names(engine)
+    except ValueError:
+        return  # candidate_task names the unknown engine
+    for name in names:
+        if importlib.util.find_spec(name) is None:
+            raise CandidateRejected(f'run {run.run_id} simulates with {engine}; this evaluator '
+                                    f'cannot import {name}: install it or start the evaluator '
+                                    'where it is')
+    if wanted and engines_version(engine) != wanted:
         raise CandidateRejected(f'run {run.run_id} simulates with {wanted}; this evaluator has '
-                                f'{engine_version(engine)}: results would differ')
+                                f'{engines_version(engine)}: results would differ')
 
 
 def candidate_task(run, candidate):

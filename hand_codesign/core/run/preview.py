@@ -27,12 +27,14 @@ mapping of plain lists, numbers and strings, ready for JSON::
     hierarchy_grown     {count, choices}: of the grown structures (`choices`, the end of
                         `hierarchy`) a run visits `count`, those grown from the best checks
     steps_per_rollout   physics steps of one world's rollout (it ends at the last goal)
-    steps_per_evaluation  worlds x steps_per_rollout: one candidate
+    steps_per_evaluation  worlds x steps_per_rollout: one candidate (x its engines, when the
+                        task evaluates in several: physics.engines)
     budget              algorithm, iterations, population, world states, and per structure and
                         in all the evaluations, rollouts and physics steps the budget allows
                         (a hierarchy optimizes each structure `repeats` times; a two-stage
                         task runs stage 1 on the nominal world and stage 2 on its worlds, each
-                        with the whole budget; the total counts the costliest grown ones)
+                        with the whole budget; the total counts the costliest grown ones;
+                        rollouts and steps count each engine of physics.engines)
 
 Counts are what the budget allows; a run can do less (`budget.may_end_early` says why): early
 termination and unstable worlds cut rollouts, a design starting in collision is not simulated,
@@ -74,7 +76,7 @@ def preview(task):
     grown = grown_structures(task, path)
     structures, grown_budgets = structure_budgets(task, path, grown)
     rollout = rollout_steps(task)
-    steps_per_evaluation = task.num_world_states * rollout
+    steps_per_evaluation = task.num_world_states * rollout * len(task.physics.engines)
     return {
         'task': task.name,
         'source': task.source,
@@ -178,6 +180,8 @@ def structure_budget(task, structure, path):
         rollouts += checks * structure_task.num_world_states
     seeded = optimizer.x0.tolist() != spec.initial_mean().tolist()
     steps = rollout_steps(structure_task)
+    engines = len(task.physics.engines)  # every world is rolled out in each engine
+    rollouts, check_rollouts = rollouts * engines, check_rollouts * engines
     return {
         'structure': list(structure_task.structure),
         'genome': genome(spec),

@@ -3,11 +3,13 @@ The task a run actually used: the task file's text plus the run's overrides.
 
 A run records the task file's text as loaded and, apart from it, the values its command line
 overrode (seed, budget, world states, physics engine: RunInfo.engine, with the engine's
-version in RunInfo.engine_version). Every process that needs the run's task (evaluators,
-replay, analysis, resume) rebuilds it with `run_task`, so they all agree on it exactly.
+version in RunInfo.engine_version). A run in several engines (physics.engines) records them
+comma-separated in both, in the task's order: 'pybullet,mujoco' and
+'pybullet==3.2.7,mujoco==4.0.0'; a run in one engine records it as before. Every process
+that needs the run's task (evaluators, replay, analysis, resume) rebuilds it with `run_task`,
+so they all agree on it exactly.
 """
 
-import dataclasses
 import functools
 
 from hand_codesign.core.task import load_task
@@ -27,8 +29,9 @@ def run_task(task_yaml, source, seed, iterations, population, world_states, vari
     `world_states` are the run's overrides (RunInfo's fields); `variant`, a
     core.task.variant.Variant, makes it the version of the run's task a candidate is evaluated
     on (None: the run's task itself); `engine` is the run's physics engine ('pybullet' or
-    'mujoco'; '': the task file's). Raises TaskError (a ValueError) for a text or override
-    the task does not accept, ValueError for an unknown engine.
+    'mujoco', or several comma-separated: 'pybullet,mujoco'; '': the task file's). Raises
+    TaskError (a ValueError) for a text or override the task does not accept, ValueError for
+    an unknown engine.
     """
     return with_overrides(parse_task(task_yaml, source=source), seed, iterations, population,
                           world_states, variant, engine)
@@ -56,19 +59,44 @@ def engine_version(engine):
         return f'{engine}==unknown'
 
 
+def engines_text(task):
+    """Return RunInfo.engine of a task's run: its engines, comma-separated ('pybullet')."""
+    return ','.join(task.physics.engines)
+
+
+def engines_version(engines):
+    """Return RunInfo.engine_version of a run in `engines` (a RunInfo.engine text)."""
+    return ','.join(engine_version(engine) for engine in engine_names(engines))
+
+
+def engine_names(engines):
+    """
+    Return the engines of a RunInfo.engine text ('pybullet,mujoco') as a tuple, checked.
+
+    Raises ValueError naming an unknown or repeated engine.
+    """
+    names = tuple(name.strip() for name in str(engines).split(','))
+    for name in names:
+        if name not in ENGINES:
+            raise ValueError(f'physics engine {name!r}: expected one of {", ".join(ENGINES)} '
+                             '(several: comma-separated, e.g. pybullet,mujoco)')
+    if len(set(names)) != len(names):
+        raise ValueError(f'physics engines {engines!r}: each engine once')
+    return names
+
+
 def with_overrides(task, seed, iterations, population, world_states, variant=None, engine=''):
     """
     Return task with a run's overrides applied (0 or None keeps the task's value).
 
     `variant` (a core.task.variant.Variant: structure, world states, horizon, stage, held-out
     worlds, resampled draw) says which version of the run's task a candidate is evaluated on;
-    `engine` the run's physics engine (RunInfo.engine; '' or None: the task file's).
+    `engine` the run's physics engine or engines, comma-separated (RunInfo.engine; '' or None:
+    the task file's).
     """
     changes = {'seed': int(seed)}
-    if engine and engine not in ENGINES:
-        raise ValueError(f'physics engine {engine!r}: expected one of {", ".join(ENGINES)}')
     if engine:
-        changes['physics'] = dataclasses.replace(task.physics, engine=engine)
+        changes['physics'] = task.physics.with_engines(engine_names(engine))
     if iterations:
         changes['iterations'] = int(iterations)
     if population:

@@ -7,8 +7,9 @@ Each raises TaskError naming the key to fix.
 import math
 
 from hand_codesign.core.task.descriptors import default_descriptors, descriptor_ranges
-from hand_codesign.core.task.parts import (ALGORITHMS, ArchiveSpec, MORPHOLOGY_PARAMETERS,
-                                           QD_ALGORITHMS, RESTART_ALGORITHMS, resting_height,
+from hand_codesign.core.task.parts import (ALGORITHMS, ArchiveSpec, ENGINES,
+                                           MORPHOLOGY_PARAMETERS, QD_ALGORITHMS,
+                                           RESTART_ALGORITHMS, resting_height,
                                            RESTING_TOLERANCE, TaskError)
 import numpy as np
 
@@ -62,6 +63,15 @@ def check_task(task):
     _check_stages(task, fail)
     _check_worlds(task, fail)
     _check_archive(task, fail)
+    _check_physics(task, fail)
+
+
+def _check_physics(task, fail):
+    physics = task.physics
+    if physics.engines[0] != physics.engine or len(set(physics.engines)) != len(
+            physics.engines) or not set(physics.engines) <= set(ENGINES):
+        fail('physics.engines', f'distinct engines of {", ".join(ENGINES)} led by physics.engine '
+             f'{physics.engine!r}, got {list(physics.engines)!r}')
 
 
 def _check_archive(task, fail):
@@ -109,6 +119,9 @@ def _check_racing(task, fail):
     if task.worlds.aggregate != 'mean':
         fail('worlds.racing', 'no racing with aggregate: worst (its bound is on the mean over '
              'the worlds, eq. 5)')
+    if len(task.physics.engines) > 1:
+        fail('worlds.racing', 'no racing with several physics.engines (its bound is on one '
+             f"engine's worlds), got {list(task.physics.engines)!r}: drop one or racing")
 
 
 def _check_stages(task, fail):

@@ -8,6 +8,7 @@ is read (docs/TASK.md is generated from them). This module imports only the sche
 room, so every other module of it (and the genome) can import it.
 """
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any, Optional, Tuple
 
@@ -36,6 +37,8 @@ RESTING_TOLERANCE = 1e-4  # m: how far a plane start's z may be from the resting
 AXES = ('x', 'y', 'z')  # the world axes a position goal may measure
 WORLD_AGGREGATES = ('mean', 'worst')  # worlds.aggregate: eq. (5)'s mean, or CVaR of the worst
 ENGINES = ('pybullet', 'mujoco')  # physics.engine: core.sim.pybullet_sim or core.sim.mujoco_sim
+# physics.engine_aggregate: the mean of the engines' objectives, or per objective the worse one
+ENGINE_AGGREGATES = ('mean', 'worst')
 WORLD_RESAMPLING = ('none', 'generation')  # worlds.resample: a fixed set, or a draw per generation
 FINAL_CHECK = 5  # default worlds.final_check: the last generations whose bests are re-evaluated
 
@@ -354,9 +357,32 @@ class PhysicsSpec:
         'how far apart Bullet keeps contact points', 'number', unit='m', positive=True,
         default=0.02)
     # 'pybullet' (Table I's runs) or 'mujoco' (core.sim.mujoco_sim, whose own contact settings
-    # are fixed there; the two Bullet settings above do not apply to it)
+    # are fixed there; the two Bullet settings above do not apply to it). With `engines` it is
+    # the list's first: the engine of what simulates one engine only (replay, export)
     engine: str = key('the physics engine (MuJoCo ignores the two Bullet settings)', 'choice',
                       choices=ENGINES, default='pybullet')
+    # physics as a randomized quantity (issue 47): every candidate meets the same worlds in
+    # each engine of the list (core.evaluate), scored by `engine_aggregate`
+    engines: Tuple[str, ...] = key(
+        'the physics engines every candidate is evaluated in, on the same worlds, e.g. '
+        '[pybullet, mujoco] (instead of engine)', 'custom', read='engine_list', default=GIVEN,
+        default_text='[engine]', values=f'distinct engines of {", ".join(ENGINES)}',
+        field_default=())
+    engine_aggregate: str = key(
+        "with several engines: the mean of the engines' objectives, or per objective the "
+        'worse engine', 'choice', choices=ENGINE_AGGREGATES, default='mean')
+
+    def __post_init__(self):
+        # one engine: the list of it. An `engine` that is not the list's first (code that sets
+        # engine alone, as before the list: dataclasses.replace(physics, engine=...)) makes
+        # the physics of that one engine.
+        if len(self.engines) <= 1 or self.engine != self.engines[0]:
+            object.__setattr__(self, 'engines', (self.engine,))
+
+    def with_engines(self, engines):
+        """Return a copy that evaluates in `engines` (a sequence of ENGINES), first one first."""
+        engines = tuple(engines)
+        return dataclasses.replace(self, engine=engines[0], engines=engines)
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,8 @@ import dataclasses
 
 from hand_codesign.core.task.checks import check_task
 from hand_codesign.core.task.design_reader import DesignReader
-from hand_codesign.core.task.parts import AXES, GoalSpec, ParameterSpec, TaskError
+from hand_codesign.core.task.parts import (AXES, ENGINES, GoalSpec, ParameterSpec, PhysicsSpec,
+                                           TaskError)
 from hand_codesign.core.task.settings_reader import SettingsReader
 from hand_codesign.core.task.spec import Task
 from hand_codesign.core.task.values import join_key
@@ -170,6 +171,27 @@ class _Reader(SettingsReader, DesignReader):
             self.fail(key, 'a non-empty list of distinct world axes from x, y, z, e.g. '
                       '[x, y]', value)
         return tuple(axis for axis in AXES if axis in value)
+
+    def physics(self, spec, value, key):
+        """Return the physics: one `engine`, or the list `engines` (engine: the list's first)."""
+        values = self.section(PhysicsSpec, value, key)
+        if values['engines'] is None:
+            values['engines'] = ()  # PhysicsSpec makes it (engine,)
+        elif 'engine' in value:
+            self.fail(join_key(key, 'engine'), 'engine or engines, not both (engines: '
+                      f'{list(values["engines"])} names every engine)', got=False)
+        else:
+            values['engine'] = values['engines'][0]
+        return PhysicsSpec(**values)
+
+    def engine_list(self, spec, value, key):
+        """Return physics.engines: a non-empty list of distinct engines."""
+        if (not isinstance(value, list) or not value or any(
+                not isinstance(name, str) or name not in ENGINES for name in value)
+                or len(set(value)) != len(value)):
+            self.fail(key, f'a non-empty list of distinct engines of {", ".join(ENGINES)}, '
+                      'e.g. [pybullet, mujoco]', value)
+        return tuple(value)
 
     def axis_ranges(self, spec, value, key):
         """Return the Bounds of an offset along world x, y and z: {x: [l, u], y: ..., z: ...}."""

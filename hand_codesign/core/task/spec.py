@@ -74,9 +74,9 @@ class Task:
         yaml='optimizer.archive')
     weights: WeightsSpec = key('the weights of the weighted-sum fitness', 'section',
                                section=WeightsSpec, default={}, field_default=WeightsSpec())
-    physics: PhysicsSpec = key("the physics engine and Bullet's settings (defaults: Table I's "
-                               'runs)', 'section', section=PhysicsSpec, default={},
-                               field_default=PhysicsSpec())
+    physics: PhysicsSpec = key("the physics engine or engines and Bullet's settings (defaults: "
+                               "Table I's runs)", 'section', section=PhysicsSpec, default={},
+                               field_default=PhysicsSpec(), read='physics')
     worlds: WorldsSpec = key('how the worlds score a candidate and which worlds it meets',
                              'section', section=WorldsSpec, default={},
                              field_default=WorldsSpec())
