@@ -161,8 +161,9 @@ def drive_along_goals(task, design):
     Evaluate `design` in real PyBullet with the object reset onto its perfect motion.
 
     At every step the rollout loop reports (on_frame) the object is put, at rest, onto the
-    perfect pose of the next step; without gravity it stays there through the step, so the
-    loop reads back that pose from PyBullet, records it and scores it as in any evaluation.
+    perfect pose of the next step; without gravity, and with no contact with the hand, it
+    stays there through the step, so the loop reads back that pose from PyBullet, records it
+    and scores it as in any evaluation.
     """
     # The hand is held still and gravity is switched off at the first frame: gravity
     # compensation, which reads the world's gravity when the rollout starts, would put it back.
@@ -178,6 +179,11 @@ def drive_along_goals(task, design):
         client = simulator.client
         if step == 0:
             client.setGravity(0.0, 0.0, 0.0)
+            # The hand takes no part in a perfect motion: a seed hand that holds its object
+            # (Task 2's fingertips) would nudge it off its goals by a fraction of a millimetre.
+            for link in range(-1, client.getNumJoints(simulator.hand)):
+                client.setCollisionFilterPair(simulator.hand, simulator.object_body, link, -1,
+                                              0)
         position, orientation = perfect_pose(task, schedule, current['state'],
                                              (step + 1) * task.time_step)
         client.resetBasePositionAndOrientation(simulator.object_body, position.tolist(),
