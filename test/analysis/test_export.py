@@ -18,6 +18,8 @@ import pytest
 import yaml
 import yourdfpy
 
+pytestmark = pytest.mark.system
+
 
 @pytest.fixture(scope='module')
 def exported(real_run, tmp_path_factory):

@@ -38,6 +38,7 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 import numpy as np
 import psutil
+import pytest
 
 LAYOUT = ROOT / 'config' / 'foxglove_layout.json'
 MCAP_MAGIC = b'\x89MCAP0\r\n'
@@ -80,6 +81,7 @@ def best_design(bag):
     return task, design, genome_spec(task).decode(design.x)
 
 
+@pytest.mark.system
 def test_the_bag_holds_the_best_design_of_each_generation_as_markers(real_run, tmp_path):
     arrays = decoded_messages(real_run.mcap, contract.BEST_DESIGN)
     summaries = decoded_messages(real_run.mcap, contract.GENERATION_SUMMARY)
@@ -96,6 +98,7 @@ def test_the_bag_holds_the_best_design_of_each_generation_as_markers(real_run, t
     assert main(['analyze', str(real_run.bag), '--out', str(tmp_path / 'report')]) == 0
 
 
+@pytest.mark.system
 def test_replay_writes_a_ros2_mcap_that_plays_the_rollout(real_run, tmp_path, capsys):
     out = tmp_path / 'rollout.mcap'
     assert main(['replay', str(real_run.bag), '--mcap', str(out)]) == 0
@@ -141,6 +144,7 @@ def test_replay_writes_a_ros2_mcap_that_plays_the_rollout(real_run, tmp_path, ca
         sum(len(frame[contract.REPLAY_MARKERS].markers) for frame in frames.values())
 
 
+@pytest.mark.system
 def test_replay_mcap_refuses_a_bad_file_name_in_one_line(real_run, tmp_path, capsys):
     assert main(['replay', str(real_run.bag), '--mcap', str(tmp_path / 'x.bag')]) == 2
     error = capsys.readouterr().err
@@ -261,6 +265,7 @@ def listening_addresses(port):
             if connection.status == psutil.CONN_LISTEN and connection.laddr.port == port}
 
 
+@pytest.mark.system
 def test_a_busy_port_stops_the_live_view_with_one_line():
     with socket.socket() as busy:
         busy.bind(('127.0.0.1', 0))
@@ -275,6 +280,7 @@ def test_a_busy_port_stops_the_live_view_with_one_line():
     assert f'cannot serve on 127.0.0.1:{port}' in process.stderr, process.stderr
 
 
+@pytest.mark.system
 def test_a_live_run_is_served_to_foxglove_as_its_bag_records_it(tmp_path):
     bag = tmp_path / 'live'
     command = CLI + ['run', '--task', str(TASK), '--evaluators', '1', '--bag', str(bag),

@@ -12,6 +12,9 @@ from hand_codesign.core.experiments.measures import (measure_worlds, summarize, 
 from hand_codesign.core.experiments.robustness import start_and_goal_poses
 from hand_codesign.core.sim.worlds import world_states
 import numpy as np
+import pytest
+
+pytestmark = pytest.mark.system
 
 COMMAND = [sys.executable, '-m', 'hand_codesign.cli', 'offsets']
 

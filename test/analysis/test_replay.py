@@ -10,6 +10,8 @@ import imageio.v3 as imageio
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.system
+
 
 def test_replay_of_the_best_design_is_bit_identical_and_animated(real_run, tmp_path, capsys):
     gif = tmp_path / 'best.gif'

@@ -32,6 +32,7 @@ def report(real_run, tmp_path_factory):
     return out
 
 
+@pytest.mark.system
 def test_analyze_writes_every_file(real_run, report):
     for name in ('evaluations.csv', 'generations.csv', 'convergence.png', 'report.md'):
         assert (report / name).stat().st_size > 0, name
@@ -50,6 +51,7 @@ def test_analyze_writes_every_file(real_run, report):
         assert f'| {name} | {value:.6g} |' in text, name
 
 
+@pytest.mark.system
 def test_report_shows_the_best_design_at_the_start_and_end_of_world_0(report):
     import imageio.v3 as imageio
     text = (report / 'report.md').read_text()
@@ -75,6 +77,7 @@ def test_design_picture_places_each_shape_at_its_pose():
     assert np.allclose(np.linalg.norm(points - [0.0, 0.0, 0.1], axis=1), 0.01)
 
 
+@pytest.mark.system
 def test_csv_rows_are_the_bag_evaluations_bit_for_bit(real_run, report):
     rows = read_csv(report / 'evaluations.csv')
     evaluations = decoded_messages(real_run.mcap, topics.EVALUATIONS)
@@ -100,6 +103,7 @@ def test_csv_rows_are_the_bag_evaluations_bit_for_bit(real_run, report):
     assert float(best[0]['fitness']) == real_run.result['fitness']
 
 
+@pytest.mark.system
 def test_generations_csv_follows_the_summaries(real_run, report):
     rows = read_csv(report / 'generations.csv')
     assert [int(row['generation']) for row in rows] == [0, 1, 2, 3]
@@ -111,6 +115,7 @@ def test_generations_csv_follows_the_summaries(real_run, report):
     assert float(rows[-1]['best_fitness_so_far']) == real_run.result['fitness']
 
 
+@pytest.mark.system
 def test_terminal_summary_and_default_folder(real_run, tmp_path, capsys):
     bag = tmp_path / 'copy.mcap'
     copy_bag(real_run.mcap, bag)
@@ -143,6 +148,7 @@ def test_mocma_run_gets_its_pareto_fronts(tmp_path):
 
 # -------------------------------------------------------------------- bad bags
 
+@pytest.mark.system
 def test_empty_file_gives_one_clear_line(tmp_path):
     bag = tmp_path / 'empty.mcap'
     bag.write_bytes(b'')
@@ -180,6 +186,7 @@ def test_missing_bag(tmp_path, capsys):
     assert 'no such file or directory' in capsys.readouterr().err
 
 
+@pytest.mark.system
 def test_truncated_bag_is_read_up_to_the_cut(real_run, tmp_path, capsys):
     data = real_run.mcap.read_bytes()
     bag = tmp_path / 'cut.mcap'
@@ -194,6 +201,7 @@ def test_truncated_bag_is_read_up_to_the_cut(real_run, tmp_path, capsys):
     assert 'truncated' in (out / 'report.md').read_text()
 
 
+@pytest.mark.system
 def test_bag_cut_before_the_run_started(real_run, tmp_path, capsys):
     bag = tmp_path / 'early.mcap'
     copy_bag(real_run.mcap, bag, keep=lambda topic, *_: topic == topics.EVALUATOR_STATUS)
@@ -205,6 +213,7 @@ def test_bag_cut_before_the_run_started(real_run, tmp_path, capsys):
     assert read_csv(out / 'evaluations.csv') == []
 
 
+@pytest.mark.system
 def test_gene_columns_are_the_task_genes(report):
     header = (report / 'evaluations.csv').read_text().splitlines()[0].split(',')
     names = genome_spec(run_task(TASK.read_text(), str(TASK), 3, 4, 6, 2)).names

@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 
+@pytest.mark.system
 def test_recorded_evaluations_are_what_the_optimizer_was_told(real_run):
     recorded = recorded_evaluations(read_run(real_run.bag))
     evaluations = decoded_messages(real_run.mcap, topics.EVALUATIONS)
@@ -48,6 +49,7 @@ def interrupted_copy(real_run, path, generation=2, evaluations_kept=3):
         :evaluations_kept]}
 
 
+@pytest.mark.system
 def test_resume_from_an_interrupted_bag_reaches_the_uninterrupted_result(real_run, tmp_path):
     bag, kept_ids = interrupted_copy(real_run, tmp_path / 'interrupted.mcap')
     point = resume_point(bag)
@@ -77,11 +79,13 @@ def test_resume_from_an_interrupted_bag_reaches_the_uninterrupted_result(real_ru
     assert np.array_equal(result.x, candidates[result.candidate_id].genome)
 
 
+@pytest.mark.system
 def test_a_finished_run_is_not_resumed(real_run):
     with pytest.raises(UserError, match=r'already finished \(maxiter=4\); nothing to resume'):
         resume_point(real_run.bag)
 
 
+@pytest.mark.system
 def test_a_bag_that_disagrees_with_its_seed_is_refused(real_run, tmp_path):
     def other_seed(topic, message):
         if topic == topics.RUN_INFO:
@@ -94,6 +98,7 @@ def test_a_bag_that_disagrees_with_its_seed_is_refused(real_run, tmp_path):
         resume_point(bag)
 
 
+@pytest.mark.system
 def test_a_bag_without_run_info_cannot_be_resumed(real_run, tmp_path):
     bag = copy_bag(real_run.mcap, tmp_path / 'statuses.mcap',
                    keep=lambda topic, *_: topic == topics.EVALUATOR_STATUS)
@@ -101,6 +106,7 @@ def test_a_bag_without_run_info_cannot_be_resumed(real_run, tmp_path):
         resume_point(bag)
 
 
+@pytest.mark.system
 def test_run_resume_after_interrupting_a_run(real_run, tmp_path):
     # The bag is cut in generation 2 as an interrupted recorder leaves it. (Interrupting a
     # live run of this size raced with its end: generations of 6 candidates on 2 worlds take
@@ -115,6 +121,7 @@ def test_run_resume_after_interrupting_a_run(real_run, tmp_path):
         assert result[key] == real_run.result[key], key
 
 
+@pytest.mark.system
 def test_a_finished_run_continues_as_a_run_of_the_larger_budget(real_run, tmp_path):
     # the real run had 4 generations; continued to 6, it ends where a 6-generation run of the
     # same task and seed ends, having evaluated only generations 4 and 5
@@ -138,6 +145,7 @@ def test_a_finished_run_continues_as_a_run_of_the_larger_budget(real_run, tmp_pa
     assert sorted(set(np.asarray(record.candidates['generation']).tolist())) == [4, 5]
 
 
+@pytest.mark.system
 def test_continuing_asks_for_more_generations_than_the_run_had(real_run, tmp_path):
     with pytest.raises(UserError, match='continues to more generations than the 4 of'):
         resume_point(real_run.bag, iterations=4)

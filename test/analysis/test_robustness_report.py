@@ -16,6 +16,9 @@ from hand_codesign.core.run.runs import run_task
 from hand_codesign.core.sim.worlds import grid_world_states
 from hand_codesign.core.task.variant import Variant
 import numpy as np
+import pytest
+
+pytestmark = pytest.mark.system
 
 
 def read_csv(path):

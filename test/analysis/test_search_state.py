@@ -42,6 +42,7 @@ def analyzed(bag, out, *flags):
     return {name: np.array([float(row[name]) for row in rows]) for name in rows[0]}
 
 
+@pytest.mark.system
 @pytest.mark.parametrize('suffix', ['svg', 'pdf'])
 def test_cma_es_step_size_and_axis_ratio_per_generation(bags, tmp_path, suffix):
     state = analyzed(bags['cma'], tmp_path / 'report', '--format', suffix)
@@ -59,6 +60,7 @@ def test_cma_es_step_size_and_axis_ratio_per_generation(bags, tmp_path, suffix):
     assert np.all(state['sigma'] > 0)
 
 
+@pytest.mark.system
 def test_mo_cma_es_hypervolume_per_generation(bags, tmp_path):
     state = analyzed(bags['mocma'], tmp_path / 'report')
     assert list(state['generation']) == [0, 1, 2, 3]
@@ -66,6 +68,7 @@ def test_mo_cma_es_hypervolume_per_generation(bags, tmp_path):
     assert np.all(np.diff(state['hypervolume']) >= 0) and state['hypervolume'][-1] > 0
 
 
+@pytest.mark.system
 def test_quality_diversity_coverage_and_qd_score(bags, tmp_path):
     state = analyzed(bags['cma-mae'], tmp_path / 'report')
     archive = records.archive_of(records.open_run(bags['cma-mae']))

@@ -5,6 +5,10 @@ import pathlib
 import subprocess
 import sys
 
+import pytest
+
+pytestmark = pytest.mark.system
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 COMMAND = [sys.executable, '-m', 'hand_codesign.cli', 'reproduce']
 

@@ -41,6 +41,7 @@ TASK5 = ROOT / 'config' / 'reproduce' / 'task5.yaml'
 TASK5_ALONG_X = ROOT / 'config' / 'reproduce' / 'task5_along_x.yaml'
 
 
+@pytest.mark.system
 def test_list_names_every_experiment_first_on_its_line(capsys):
     assert cli.main(['reproduce', '--list']) == 0
     lines = capsys.readouterr().out.splitlines()
@@ -51,6 +52,7 @@ def test_list_names_every_experiment_first_on_its_line(capsys):
         assert name in names
 
 
+@pytest.mark.system
 def test_unknown_experiment_is_one_line(capsys):
     assert cli.main(['reproduce', 'task9']) == 2
     error = capsys.readouterr().err.strip()
@@ -373,6 +375,7 @@ def test_time_left_is_fitted_to_runs_simulated_whole_in_this_session():
     assert progress.seconds_left() == pytest.approx((300.0 + 320.0) / 2001 * (1000 + 1002))
 
 
+@pytest.mark.system
 def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(tmp_path):
     # started in the background and stopped with SIGTERM (as `kill` does): the run it forwards
     # the stop to closes its bag although it ignores SIGINT, well before the 120 s after which
@@ -456,6 +459,7 @@ def test_interrupted_campaign_keeps_finished_runs_resumes_and_tables_recompute(t
     assert all(len(told) == len(best) > 0 for _, curves in panels for _, (told, best) in curves)
 
 
+@pytest.mark.system
 def test_only_names_configurations_of_the_experiment(capsys):
     assert cli.main(['reproduce', 'levers-task6', '--only', 'cma-diagonal', 'nope']) == 2
     error = capsys.readouterr().err.strip()
@@ -490,6 +494,7 @@ def test_shares_in_bands_take_every_world_once():
     assert shares_in_bands(values, within, [2.0, 3.0]) == [(2.0, 3.0, 0, None)]
 
 
+@pytest.mark.system
 def test_analyze_reports_the_same_measures_for_one_run(real_run, tmp_path, capsys):
     out = tmp_path / 'report'
     assert cli.main(['analyze', str(real_run.bag), '--out', str(out), '--unseen', '20']) == 0
@@ -542,6 +547,7 @@ def test_every_preset_and_table_named_in_results_exists_and_checks():
         assert (ROOT / 'docs' / table).exists(), f'docs/RESULTS.md names a missing {table}'
 
 
+@pytest.mark.system
 def test_seeds_are_a_count_a_range_or_a_list(capsys):
     assert definition.parse_seeds('3') == (1, 2, 3)  # the tuning seeds
     assert definition.parse_seeds('101-105') == (101, 102, 103, 104, 105)  # fresh seeds

@@ -56,6 +56,7 @@ def test_a_task_file_with_an_unknown_key(capsys, tmp_path):
     assert nothing_but(tmp_path, 'unknown.yaml')
 
 
+@pytest.mark.system
 def test_resume_with_another_task_file(capsys, tmp_path, real_run):
     line = one_line_error(capsys, 'run', '--resume', real_run.bag, '--task', OTHER_TASK,
                           '--bag', tmp_path / 'resumed')
@@ -63,6 +64,7 @@ def test_resume_with_another_task_file(capsys, tmp_path, real_run):
     assert nothing_but(tmp_path)
 
 
+@pytest.mark.system
 @pytest.mark.parametrize('size, expected', [
     (0, 'empty file; expected an MCAP bag'),
     (5, 'not an MCAP file'),
@@ -93,6 +95,7 @@ def evaluator_with_key_file(key):
         timeout=60)
 
 
+@pytest.mark.system
 def test_key_files_with_wrong_permissions_or_length(tmp_path):
     credential = RunKeys(bytes(range(32))).credential('host-b')
     readable = tmp_path / 'readable.key'

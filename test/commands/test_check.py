@@ -47,6 +47,7 @@ def test_every_preset_checks(path, capsys):
         summary['steps_per_rollout']
 
 
+@pytest.mark.system
 def test_json_round_trips_the_task():
     """The JSON of the real command holds what the core computes, float for float."""
     path = TASKS / 'task1.yaml'  # goals relative to the start, trajectories, a seed design
@@ -176,6 +177,7 @@ def one_line_error(process, path):
     return lines[0]
 
 
+@pytest.mark.system
 def test_a_file_that_is_not_utf8_is_one_line(tmp_path):
     path = tmp_path / 'latin1.yaml'
     path.write_bytes((TASKS / 'task5.yaml').read_bytes() + '# d\xe9j\xe0 vu\n'.encode('latin-1'))
@@ -188,6 +190,7 @@ def test_a_file_that_is_not_utf8_is_one_line(tmp_path):
     assert not bag.exists()
 
 
+@pytest.mark.system
 def test_a_missing_file_is_one_line(tmp_path):
     path = tmp_path / 'missing.yaml'
     assert 'cannot read the task file' in one_line_error(run_command('check', str(path)), path)

@@ -25,6 +25,7 @@ def run(capsys, *argv):
     return code, output.out, output.err
 
 
+@pytest.mark.system
 def test_help_lists_every_verb():
     output = subprocess.run([sys.executable, '-m', 'hand_codesign.cli', '--help'],
                             capture_output=True, text=True, check=True).stdout
@@ -68,6 +69,7 @@ def test_bag_verbs_name_a_missing_bag(capsys, tmp_path, verb):
     assert 'missing-bag' in err and 'Traceback' not in err
 
 
+@pytest.mark.system
 def test_a_missing_verb_is_an_argparse_error():
     process = subprocess.run([sys.executable, '-m', 'hand_codesign.cli'], capture_output=True,
                              text=True)
@@ -102,6 +104,7 @@ def test_run_takes_the_shells_ros_domain_unless_told_otherwise():
         run_domain(None, {'ROS_DOMAIN_ID': 'x1'})
 
 
+@pytest.mark.system
 @pytest.mark.parametrize('value', ['free', '233', '-1'])
 def test_a_bad_domain_id_is_one_line(capsys, value):
     with pytest.raises(SystemExit) as stop:
@@ -110,6 +113,7 @@ def test_a_bad_domain_id_is_one_line(capsys, value):
     assert stop.value.code == 2 and f'expected "auto" or 0 to 232, got {value!r}' in err
 
 
+@pytest.mark.system
 @pytest.mark.parametrize('flag', ['--progress-every', '--start-timeout'])
 @pytest.mark.parametrize('value', ['soon', '-5', 'nan'])
 def test_a_bad_duration_is_one_line(capsys, flag, value):
@@ -127,6 +131,7 @@ def test_a_quiet_run_says_a_progress_line_at_most_once_an_interval():
     assert said == [0.0, 300.0, 650.0, 1000.0]
 
 
+@pytest.mark.system
 def test_version_names_the_package_version():
     output = subprocess.run([sys.executable, '-m', 'hand_codesign.cli', '--version'],
                             capture_output=True, text=True, check=True).stdout
@@ -148,12 +153,14 @@ def run_with_stdout_unread(command):
         os.close(writing_end)
 
 
+@pytest.mark.system
 def test_a_reader_that_stops_reading_ends_the_verb_quietly():
     result = run_with_stdout_unread([sys.executable, '-m', 'hand_codesign.cli', 'reproduce',
                                      '--list'])
     assert result.returncode == 141 and result.stderr == ''
 
 
+@pytest.mark.system
 def test_a_broken_pipe_that_is_not_stdout_is_still_an_error():
     # stdout is read to the end here, so the pipe that broke must be another one
     result = subprocess.run(

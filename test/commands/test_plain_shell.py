@@ -51,6 +51,7 @@ def test_the_plain_environment_lacks_what_make_sets():
     assert not any(name.startswith(('AMENT', 'CMAKE', 'ROS_', '_ROS')) for name in PLAIN)
 
 
+@pytest.mark.system
 def test_replay_to_mcap_by_path_and_after_activate(plain_bag, tmp_path):
     out = tmp_path / 'rollout.mcap'
     assert 'MCAP for Foxglove' in plain('replay', plain_bag, '--mcap', out)
@@ -65,6 +66,7 @@ def test_replay_to_mcap_by_path_and_after_activate(plain_bag, tmp_path):
     assert [path.name for path in tmp_path.iterdir() if path.name.startswith('.')] == []
 
 
+@pytest.mark.system
 def test_bag_verbs(plain_bag, tmp_path):
     assert 'report:' in plain('analyze', plain_bag, '--out', tmp_path / 'report')
     assert (tmp_path / 'report' / 'report.md').exists()
@@ -77,11 +79,13 @@ def test_bag_verbs(plain_bag, tmp_path):
     assert sorted(path.name for path in tmp_path.iterdir()) == ['export', 'report', 'rob']
 
 
+@pytest.mark.system
 def test_verbs_without_a_bag():
     assert 'goals' in plain('check', TASK)
     assert 'all' in plain('reproduce', '--list').split()
 
 
+@pytest.mark.system
 def test_a_node_started_by_hand(tmp_path):
     # the recorder looks its message types up through ament_index_python
     bag = tmp_path / 'by-hand'

@@ -4,6 +4,7 @@ from hand_codesign.core import contract
 from hand_codesign.ros import topics
 from hand_codesign_msgs.msg import Evaluation
 from hand_codesign_msgs.msg import TrialStatus
+import pytest
 
 
 def test_every_topic_has_the_type_of_its_message_class():
@@ -33,6 +34,7 @@ def test_trial_events_are_those_of_trial_status_msg():
         contract.TOPIC_TYPES)
 
 
+@pytest.mark.system
 def test_the_contract_module_loads_neither_rclpy_nor_the_messages():
     import subprocess
     import sys

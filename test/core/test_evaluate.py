@@ -100,6 +100,7 @@ def test_the_worst_worlds_score_a_real_evaluation_as_cvar(task):
         assert cvar.fitness == pytest.approx(float(cvar.objectives @ worst.objective_weights))
 
 
+@pytest.mark.system
 def test_bit_identical_in_other_processes_and_orders(task):
     candidates = genomes(task)
     assert not any(evaluate(x, task).collision for x in candidates)  # all of them simulated

@@ -67,6 +67,7 @@ def test_the_readmes_rosdep_line_finds_both_packages(workspace):
     assert alone == {'hand_codesign'}
 
 
+@pytest.mark.system
 def test_the_readmes_colcon_line_finds_both_packages(workspace):
     paths = readme_paths('python -m colcon build', '--base-paths')
     assert paths == ['src/hand_codesign', 'src/hand_codesign/msg_defs']
@@ -100,6 +101,7 @@ def test_the_pip_set_pins_every_pip_only_package_as_requirements_txt_does():
     assert 'pip install -r src/hand_codesign/requirements-apt.txt' in README
 
 
+@pytest.mark.system
 def test_every_package_of_the_pip_set_accepts_apts_numpy(tmp_path):
     wheels = build_source_wheels(tmp_path / 'wheels')
     lines = requirement_lines(ROOT / 'requirements-apt.txt', APT_PYTHON,

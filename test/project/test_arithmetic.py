@@ -56,6 +56,7 @@ def probe(**environment):
     return result.stdout.splitlines()
 
 
+@pytest.mark.system
 def test_every_numpy_target_above_avx2_is_turned_off():
     code = ('from numpy._core._multiarray_umath import __cpu_dispatch__\n'
             'print(" ".join(__cpu_dispatch__))')
@@ -64,6 +65,7 @@ def test_every_numpy_target_above_avx2_is_turned_off():
     assert set(result.stdout.split()) - {'X86_V3'} == set(arithmetic.NUMPY_TARGETS_OFF)
 
 
+@pytest.mark.system
 @needs_avx2
 def test_a_process_pins_its_kernels_whatever_its_environment_says():
     status, numpy_targets, blas = probe(**OTHER_KERNELS)
@@ -72,6 +74,7 @@ def test_a_process_pins_its_kernels_whatever_its_environment_says():
     assert blas == 'Haswell'
 
 
+@pytest.mark.system
 def test_native_arithmetic_is_left_alone_when_asked_or_without_avx2():
     assert arithmetic.pinned_variables({arithmetic.NATIVE: '1'}, {'avx2', 'fma'}) == {}
     assert arithmetic.pinned_variables({}, {'avx', 'sse4_2'}) == {}

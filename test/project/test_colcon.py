@@ -13,6 +13,8 @@ import sys
 
 import pytest
 
+pytestmark = pytest.mark.system
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 EXECUTABLES = ['optimizer', 'evaluator', 'recorder', 'live_view', 'codesign']
 

@@ -6,6 +6,8 @@ import textwrap
 
 import pytest
 
+pytestmark = pytest.mark.system
+
 
 def run_python(code):
     """Run code in a fresh interpreter; return what it printed (it fails the test on error)."""

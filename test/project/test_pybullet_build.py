@@ -13,6 +13,8 @@ sys.path.insert(0, str(ROOT / 'tools'))
 
 import build_pybullet  # noqa: E402, I100: a tool script, not a package
 
+pytestmark = pytest.mark.system
+
 # `make fast-physics` leaves this stamp; `make setup` alone keeps the PyPI wheel
 BUILT = (ROOT / '.venv' / '.stamps' / 'physics').exists()
 

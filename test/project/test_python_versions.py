@@ -16,6 +16,8 @@ from pip_resolution import (build_source_wheels, COMPILED_HERE, normalized, pins
                             requirement_lines, resolve, resolve_compiled_here)
 import pytest
 
+pytestmark = pytest.mark.system
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 VERSIONS = ('3.11', '3.12', '3.13')
 

@@ -6,6 +6,10 @@ import shutil
 import subprocess
 import sys
 
+import pytest
+
+pytestmark = pytest.mark.system
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 

@@ -70,6 +70,7 @@ def test_one_name_per_quantity_on_the_command_line_in_task_files_and_parameters(
     assert not [path for path in presets if 'num_world_states' in path.read_text()]
 
 
+@pytest.mark.system
 def test_the_old_option_name_is_read_with_one_line():
     new = hand_codesign('check', TASK, '--population', '4', '--json')
     old = hand_codesign('check', TASK, '--popsize', '4', '--json')
@@ -80,6 +81,7 @@ def test_the_old_option_name_is_read_with_one_line():
     assert '--popsize' not in hand_codesign('run', '--help').stdout
 
 
+@pytest.mark.system
 def test_the_old_task_key_is_read_with_one_line(tmp_path):
     text = TASK.read_text().replace('\nworld_states:', '\nnum_world_states:')
     old_file = tmp_path / 'old.yaml'

@@ -7,11 +7,13 @@ from hand_codesign.ros.discovery import PROFILE_VARIABLES
 from hand_codesign.ros.discovery import START_PROFILE
 from hand_codesign.ros.discovery import start_profile
 from hand_codesign.ros.runner import System
+import pytest
 
 BARE_NODE = ('import rclpy; rclpy.init(); node = rclpy.create_node("profiled"); '
              'node.destroy_node(); rclpy.shutdown()')
 
 
+@pytest.mark.system
 def test_a_process_of_a_run_loads_the_start_profile_without_complaint(tmp_path):
     environment = System(tmp_path / 'bag', domain_id=99).environment
     assert environment[PROFILE_VARIABLES[0]] == str(START_PROFILE)

@@ -23,8 +23,11 @@ from hand_codesign.ros import topics
 from hand_codesign_msgs.msg import GenerationSummary
 from hand_codesign_msgs.msg import RunInfo
 import numpy as np
+import pytest
 from rclpy.serialization import deserialize_message
 from test_resume import interrupted_copy
+
+pytestmark = pytest.mark.system
 
 FORGED = 6
 

@@ -7,6 +7,8 @@ import sys
 
 import pytest
 
+pytestmark = pytest.mark.system
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 TASK = ROOT / 'config' / 'tasks' / 'task5.yaml'
 

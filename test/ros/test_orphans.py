@@ -28,6 +28,7 @@ from test_system import free_domain
 GRACE = 5.0  # s the processes of a killed run have to end
 
 
+@pytest.mark.system
 @pytest.mark.parametrize('after_seconds, after_line, how', [
     (0.0, None, signal.SIGKILL),              # while it starts its processes
     (0.7, None, signal.SIGKILL),              # while they import and start rclpy
@@ -49,6 +50,7 @@ def free_udp_port():
         return probe.getsockname()[1]
 
 
+@pytest.mark.system
 def test_the_discovery_server_ends_with_its_runner(tmp_path):
     seen, output = kill_run(tmp_path / 'run', after_line='generation 2/',
                             extra=['--discovery-server', str(free_udp_port())])
@@ -58,6 +60,7 @@ def test_the_discovery_server_ends_with_its_runner(tmp_path):
     assert not left, describe(left)
 
 
+@pytest.mark.system
 def test_an_evaluator_by_hand_gives_up_a_run_whose_optimizer_left(tmp_path):
     domain, key = free_domain(), tmp_path / 'by-hand.key'
     run = subprocess.Popen(

@@ -22,6 +22,8 @@ import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
 
+pytestmark = pytest.mark.system
+
 TEST_DIR = pathlib.Path(__file__).resolve().parent
 ROOT = TEST_DIR.parents[1]
 HELPERS = ROOT / 'test' / 'helpers'

@@ -35,6 +35,8 @@ from test_system import start_run
 from test_system import summaries
 import yaml
 
+pytestmark = pytest.mark.system
+
 
 @pytest.fixture
 def clean_run(real_run):

@@ -29,6 +29,8 @@ import numpy as np
 import psutil
 import pytest
 
+pytestmark = pytest.mark.system
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 HERE = ROOT / 'test' / 'ros'
 TASK = ROOT / 'config' / 'tasks' / 'task5.yaml'

@@ -23,6 +23,8 @@ from hand_codesign.core.sim.objectives import goal_schedule
 import numpy as np
 import pytest
 
+pytestmark = pytest.mark.system
+
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 TASK = ROOT / 'config' / 'tasks' / 'task1.yaml'
 BUDGET = ['--iterations', '2', '--population', '4', '--world-states', '2', '--seed', '7']

@@ -174,6 +174,7 @@ def test_task2_follows_the_growing_horizon_to_a_better_whole_rollout():
     assert staged_best < plain_best
 
 
+@pytest.mark.system
 def test_a_horizon_run_is_recorded_replayed_and_resumed(tmp_path, capsys):
     bag = tmp_path / 'task3_run'
     process = run_cli('run', '--task', TASKS / 'task3.yaml', '--evaluators', '2', '--bag', bag,

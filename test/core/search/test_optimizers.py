@@ -179,6 +179,7 @@ pickle.dump([(c.candidate_id, c.generation, c.x) for c in asked], open({out!r}, 
 """
 
 
+@pytest.mark.system
 @pytest.mark.parametrize('algorithm', ALGORITHMS)
 def test_state_continues_bit_identically_in_another_process(algorithm, tmp_path):
     reference = algorithm(6, [1.0, 0.1], 8, 10, seed=4)
@@ -374,6 +375,7 @@ print(optimizers.cma.__version__, scipy.stats.kendalltau([1, 2, 3], [1, 3, 2])[0
 """
 
 
+@pytest.mark.system
 def test_optimizers_start_without_plotting_and_statistics_which_still_import_afterwards():
     result = subprocess.run([sys.executable, '-c', QUICK_IMPORT], capture_output=True,
                             text=True, timeout=120, cwd=ROOT)

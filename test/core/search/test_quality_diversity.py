@@ -107,6 +107,7 @@ pickle.dump((rows, elites), open({out!r}, 'wb'))
 """
 
 
+@pytest.mark.system
 @pytest.mark.parametrize('algorithm', QD)
 def test_state_pickles_and_continues_bit_identically_also_in_another_process(algorithm,
                                                                              tmp_path):
@@ -289,6 +290,7 @@ BAD_ARCHIVES = [
 ]
 
 
+@pytest.mark.system
 @pytest.mark.parametrize('algorithm,archive,expected', BAD_ARCHIVES)
 def test_a_bad_archive_key_is_one_line_naming_file_and_key(algorithm, archive, expected,
                                                            tmp_path, capsys):
@@ -313,6 +315,7 @@ def mae_run(tmp_path_factory):
     return task, bag, output
 
 
+@pytest.mark.system
 def test_a_real_cma_mae_run_reports_the_archives_recommended_design(mae_run):
     task, bag, output = mae_run
     result = json.loads((bag / 'result.json').read_text())
@@ -325,11 +328,13 @@ def test_a_real_cma_mae_run_reports_the_archives_recommended_design(mae_run):
     assert result['best_candidate_id'] == min(fitness, key=fitness.get)
 
 
+@pytest.mark.system
 def test_a_real_cma_mae_run_is_the_same_with_two_evaluators(mae_run, tmp_path):
     task, bag, _ = mae_run
     assert_same_with_two_evaluators(bag, task, tmp_path, BUDGET)
 
 
+@pytest.mark.system
 def test_analyze_draws_the_archive_and_lists_its_best_designs(mae_run, tmp_path, capsys):
     _, bag, _ = mae_run
     result = json.loads((bag / 'result.json').read_text())
@@ -372,6 +377,7 @@ def resume_interrupted_copy(bag, folder):
     return resumed
 
 
+@pytest.mark.system
 def test_an_interrupted_cma_mae_run_resumes_to_the_same_result(mae_run, tmp_path):
     _, bag, _ = mae_run
     resume_interrupted_copy(bag, tmp_path)
@@ -395,6 +401,7 @@ def archive_elites(bag):
     return [(e.candidate_id, e.cell, e.descriptors, e.fitness) for e in archive.elites()]
 
 
+@pytest.mark.system
 def test_a_real_run_spans_its_archive_by_outcomes_measured_in_its_evaluations(outcome_run):
     task_path, bag = outcome_run
     record = read_run(bag)
@@ -417,12 +424,14 @@ def test_a_real_run_spans_its_archive_by_outcomes_measured_in_its_evaluations(ou
     assert [list(m.outcomes) for m in decoded] == [[s] for s in shares]
 
 
+@pytest.mark.system
 def test_a_real_run_with_outcomes_is_the_same_with_two_evaluators(outcome_run, tmp_path):
     task, bag = outcome_run
     assert_same_with_two_evaluators(bag, task, tmp_path, BUDGET)
     assert archive_elites(tmp_path / 'two') == archive_elites(bag)
 
 
+@pytest.mark.system
 def test_a_run_with_outcomes_resumes_from_its_bag_to_the_same_result(outcome_run, tmp_path):
     _, bag = outcome_run
     resumed = resume_interrupted_copy(bag, tmp_path)
@@ -431,6 +440,7 @@ def test_a_run_with_outcomes_resumes_from_its_bag_to_the_same_result(outcome_run
     assert continued and continued == summaries(bag)[-len(continued):]
 
 
+@pytest.mark.system
 def test_analyze_draws_an_archive_over_an_outcome(outcome_run, tmp_path, capsys):
     _, bag = outcome_run
     capsys.readouterr()

@@ -11,7 +11,10 @@ from hand_codesign.analysis.records import (best_candidate_id, evaluation_rows, 
 from hand_codesign.analysis.resume import resume_point
 from hand_codesign.bag.reader import read_run
 import numpy as np
+import pytest
 import yaml
+
+pytestmark = pytest.mark.system
 
 ROOT = pathlib.Path(__file__).resolve().parents[3]
 BUDGET = ['--iterations', '2', '--population', '8', '--world-states', '4', '--seed', '7']

@@ -159,6 +159,7 @@ def summaries(bag):
             for row in range(len(table))]
 
 
+@pytest.mark.system
 def test_a_real_resampled_run_is_the_same_with_one_and_two_evaluators(runs):
     folder, outputs = runs
     one, two = folder / 'evaluators1', folder / 'evaluators2'
@@ -177,6 +178,7 @@ def test_a_real_resampled_run_is_the_same_with_one_and_two_evaluators(runs):
     assert len(set(read_run(two).evaluations['evaluator_id'])) == 2
 
 
+@pytest.mark.system
 def test_the_reported_design_is_the_final_checks_best_on_the_fixed_worlds(runs, capsys,
                                                                           tmp_path):
     bag = runs[0] / 'evaluators2'
@@ -217,6 +219,7 @@ def test_the_reported_design_is_the_final_checks_best_on_the_fixed_worlds(runs, 
         resume_point(bag)
 
 
+@pytest.mark.system
 def test_a_resampled_run_resumed_in_its_final_check_reports_the_same_design(runs, tmp_path):
     bag = runs[0] / 'evaluators2'
     mcap, = sorted(bag.glob('*.mcap'))

@@ -155,6 +155,7 @@ pickle.dump(rows, open({out!r}, 'wb'))
 """
 
 
+@pytest.mark.system
 @pytest.mark.parametrize('algorithm', RESTARTING)
 def test_state_saved_anywhere_continues_bit_identically_in_another_process(algorithm, tmp_path):
     def fresh():
@@ -221,6 +222,7 @@ def test_tasks_select_the_restart_algorithms(tmp_path):
     assert make_optimizer(task, genome_spec(task).size).stagnation is None
 
 
+@pytest.mark.system
 def test_a_wrong_algorithm_is_one_line_naming_file_and_key(tmp_path, capsys):
     path = write_task(tmp_path, task_document('ipop', None), 'wrong.yaml')
     assert main(['run', '--task', str(path), '--bag', str(tmp_path / 'bag'),
@@ -274,6 +276,7 @@ def ipop_run(tmp_path_factory):
     return task, bag, output
 
 
+@pytest.mark.system
 def test_a_real_ipop_run_restarts_and_spends_its_budget(ipop_run, tmp_path, capsys):
     _, bag, output = ipop_run
     result = json.loads((bag / 'result.json').read_text())
@@ -294,11 +297,13 @@ def test_a_real_ipop_run_restarts_and_spends_its_budget(ipop_run, tmp_path, caps
     assert '(after stagnation: 1 generation without improvement)' in line
 
 
+@pytest.mark.system
 def test_a_real_ipop_run_is_the_same_with_two_evaluators(ipop_run, tmp_path):
     task, bag, _ = ipop_run
     assert_same_with_two_evaluators(bag, task, tmp_path, BUDGET)
 
 
+@pytest.mark.system
 def test_the_best_design_of_a_real_ipop_run_replays_bit_identically(ipop_run, capsys):
     _, bag, _ = ipop_run
     best = json.loads((bag / 'result.json').read_text())['best_candidate_id']

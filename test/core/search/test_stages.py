@@ -121,6 +121,7 @@ def test_two_stages_and_a_hierarchy_do_not_combine():
         task.replace(two_stage=True)
 
 
+@pytest.mark.system
 def test_a_real_two_stage_run_is_recorded_replayed_and_analyzed(tmp_path):
     task_file = TASKS / 'task1.yaml'
     assert load_run_task(task_file).two_stage  # the paper's two stages

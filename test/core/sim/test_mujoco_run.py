@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 from test_system import finish, run_killing_an_evaluator, start_run, summaries
 
+pytestmark = pytest.mark.system
+
 TASK = pathlib.Path(__file__).resolve().parents[3] / 'config' / 'tasks' / 'task5.yaml'
 MUJOCO = ['--engine', 'mujoco']
 # enough generations that an evaluator killed after the first still had work (a MuJoCo

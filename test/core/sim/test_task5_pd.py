@@ -61,6 +61,7 @@ def test_everything_but_the_controller_is_task5s(task):
     assert morphology == [name for name in names5 if not name.startswith('controller.')]
 
 
+@pytest.mark.system
 def test_pd_evaluations_are_bit_identical_in_other_processes(task):
     spec = genome_spec(task)
     generator = np.random.default_rng(11)

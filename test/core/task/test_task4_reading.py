@@ -37,6 +37,7 @@ def test_the_named_variants_keep_the_earlier_reading_free_joints(name):
     assert task.name.endswith('free_joints') and not limit_genes(task)
 
 
+@pytest.mark.system
 def test_a_real_run_of_the_extended_preset_returns_a_hand_with_limits(tmp_path):
     bag = tmp_path / 'task4'
     run_codesign(bag, ['--iterations', '2', '--population', '4', '--world-states', '2',
