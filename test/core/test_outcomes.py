@@ -56,6 +56,7 @@ def test_only_a_task_whose_archive_names_them_measures_outcomes(task, outcome_ta
     assert plain.outcome_names == () and plain.outcomes.shape == (0,)
 
 
+@pytest.mark.system  # a long physics run (a minute or more here)
 def test_outcome_shares_are_what_measures_finds_and_change_no_objective(task, outcome_task):  # noqa
     worlds = world_states(outcome_task)
     spec = genome_spec(outcome_task)

@@ -85,6 +85,7 @@ def test_native_arithmetic_is_left_alone_when_asked_or_without_avx2():
     assert status == f'native: {arithmetic.NATIVE} is set'
 
 
+@pytest.mark.system
 @needs_avx2
 @pytest.mark.parametrize('name', sorted(PINNED))
 def test_a_short_run_gives_the_fingerprint_of_another_processor(name, tmp_path, monkeypatch):
@@ -94,6 +95,7 @@ def test_a_short_run_gives_the_fingerprint_of_another_processor(name, tmp_path, 
     assert line.split()[1] == PINNED[name]
 
 
+@pytest.mark.system
 @pytest.mark.skipif('avx512f' not in arithmetic.processor_flags(),
                     reason='the native arithmetic of this processor is the pinned one')
 def test_unpinned_this_processor_gives_its_own_designs(tmp_path, monkeypatch):

@@ -4,8 +4,9 @@ Every test that starts a process is marked `system` (pytest.ini), so `-m "not sy
 Read from the tests' own code, without running them: a test starts a process when its body,
 a fixture it takes, or a function it calls (in its file, in test/helpers or in another test
 file it imports from), at any depth, calls subprocess, os.fork or os.system, multiprocessing,
-rclpy.init, a launch service, or runs the `hand-codesign` verbs that start processes
-in-process (`main(['run', ...])`, not `reproduce --rates`). Such a test carries
+rclpy.init, a launch service, runs the `hand-codesign` verbs that start processes
+in-process (`main(['run', ...])`, not `reproduce --rates`), asks for a pool of processes
+(`processes=2`) or loads a script of tools/ or bench/ (they run real runs). Such a test carries
 `@pytest.mark.system`, or its file `pytestmark = pytest.mark.system`. A long physics run that
 starts no process is marked by hand.
 """
@@ -45,6 +46,13 @@ def starts_by_itself(call, aliases):
     if module in STARTERS and rest:
         allowed = STARTERS[module]
         return allowed is None or rest.split('.')[-1] in allowed
+    if any(keyword.arg == 'processes' and isinstance(keyword.value, ast.Constant)
+           and isinstance(keyword.value.value, int) and keyword.value.value > 1
+           for keyword in call.keywords):
+        return True
+    if name.split('.')[-1] in ('spec_from_file_location', 'run_path'):
+        return any(isinstance(node, ast.Constant) and node.value in ('tools', 'bench')
+                   for node in ast.walk(call))
     if name.split('.')[-1] == 'main' and call.args and isinstance(call.args[0], ast.List):
         words = [word.value for word in call.args[0].elts if isinstance(word, ast.Constant)]
         return bool(words) and words[0] in PROCESS_VERBS and not READING_FLAGS & set(words)
@@ -166,9 +174,11 @@ def test_the_reading_finds_a_process_behind_a_fixture_and_a_helper(tmp_path):
         '@pytest.fixture\ndef started():\n    launch_it()\n\n'
         'def test_uses_fixture(started):\n    pass\n\n'
         'def test_pure():\n    assert 1 + 1 == 2\n\n'
+        'def test_pool():\n    evaluate_all(processes=2)\n\n'
         '@pytest.mark.system\ndef test_marked(started):\n    pass\n')
     suite = Suite(tmp_path)
     module = suite.modules['test_sample']
     assert suite.starts(module, module.functions['test_uses_fixture'])
     assert not suite.starts(module, module.functions['test_pure'])
+    assert suite.starts(module, module.functions['test_pool'])
     assert suite.starts(module, module.functions['test_marked'])

@@ -21,6 +21,7 @@ def test_paper_grid_has_5_values_on_each_of_6_quantities():
     assert len(grid_world_states(task, 5)) == 15625
 
 
+@pytest.mark.system
 def test_grid_report_is_the_same_serially_and_with_two_processes(tmp_path):
     task = load_task(TASK5)
     x = genome_spec(task).initial_mean()

@@ -124,6 +124,7 @@ def distinct(evaluations, columns=slice(None)):
     return len({tuple(np.round(e.objectives[columns], 6)) for e in evaluations})
 
 
+@pytest.mark.system  # a long physics run (a minute or more here)
 def test_task3_spreads_more_with_a_horizon():
     # Issue 9: Task 3, 12 candidates on 4 worlds, seed 2. The capsule drops onto the palm; the
     # turning goal leaves it at 0.4 s, where nearly every rollout stops, so many designs of a
@@ -154,6 +155,7 @@ def test_task3_spreads_more_with_a_horizon():
                           evaluate(candidate.x, rebuilt.batch_task).objectives)
 
 
+@pytest.mark.system  # a long physics run (a minute or more here)
 def test_task2_follows_the_growing_horizon_to_a_better_whole_rollout():
     task = load_run_task(TASKS / 'task2.yaml', seed=2, iterations=6, population=12,
                          world_states=4).replace(two_stage=False)  # the horizon alone

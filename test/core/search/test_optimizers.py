@@ -277,6 +277,7 @@ def test_seeded_search_starts_at_the_seed_point():
         assert np.allclose(points.std(axis=0), 0.1, atol=0.03)
 
 
+@pytest.mark.system  # a long physics run (a minute or more here)
 def test_optimized_task5_design_beats_the_initial_mean_on_unseen_worlds():
     # the pinned Task 5 (x and y): the preset's own search, scored along x alone, starts
     # its seed-1 design at this tiny budget in collision with one of these unseen worlds
