@@ -42,10 +42,11 @@ def starts_by_itself(call, aliases):
     if name is None:
         return False
     head, _, rest = name.partition('.')
-    module = aliases.get(head, head)
-    if module in STARTERS and rest:
+    full = aliases.get(head, head) + ('.' + rest if rest else '')  # from subprocess import run
+    module, _, attribute = full.partition('.')
+    if module in STARTERS and attribute:
         allowed = STARTERS[module]
-        return allowed is None or rest.split('.')[-1] in allowed
+        return allowed is None or attribute.split('.')[-1] in allowed
     if any(keyword.arg == 'processes' and isinstance(keyword.value, ast.Constant)
            and isinstance(keyword.value.value, int) and keyword.value.value > 1
            for keyword in call.keywords):
@@ -71,7 +72,10 @@ class Module:
         for node in self.tree.body:
             if isinstance(node, ast.Import):
                 for alias in node.names:
-                    self.aliases[alias.asname or alias.name.split('.')[0]] = alias.name
+                    if alias.asname:
+                        self.aliases[alias.asname] = alias.name
+                    else:  # import os.path binds os
+                        self.aliases[alias.name.split('.')[0]] = alias.name.split('.')[0]
             elif isinstance(node, ast.ImportFrom) and node.module:
                 for alias in node.names:
                     self.imported[alias.asname or alias.name] = (node.module, alias.name)
@@ -168,17 +172,22 @@ def test_every_test_that_starts_a_process_is_marked_system():
 
 def test_the_reading_finds_a_process_behind_a_fixture_and_a_helper(tmp_path):
     (tmp_path / 'helper_runs.py').write_text(
-        'import subprocess as sp\n\ndef launch_it():\n    sp.run(["true"])\n')
+        'import subprocess as sp\nfrom os import fork\n\ndef launch_it():\n'
+        '    sp.run(["true"])\n\ndef split():\n    fork()\n')
     (tmp_path / 'test_sample.py').write_text(
         'import pytest\nfrom helper_runs import launch_it\n\n'
         '@pytest.fixture\ndef started():\n    launch_it()\n\n'
         'def test_uses_fixture(started):\n    pass\n\n'
         'def test_pure():\n    assert 1 + 1 == 2\n\n'
         'def test_pool():\n    evaluate_all(processes=2)\n\n'
+        'def test_forks():\n    split()\n\n'
         '@pytest.mark.system\ndef test_marked(started):\n    pass\n')
     suite = Suite(tmp_path)
     module = suite.modules['test_sample']
     assert suite.starts(module, module.functions['test_uses_fixture'])
     assert not suite.starts(module, module.functions['test_pure'])
     assert suite.starts(module, module.functions['test_pool'])
+    assert not suite.starts(module, module.functions['test_forks'])  # not imported here
+    helper = suite.modules['helper_runs']
+    assert suite.starts(helper, helper.functions['split'])
     assert suite.starts(module, module.functions['test_marked'])
