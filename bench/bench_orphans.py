@@ -4,7 +4,7 @@ Sweep: SIGKILL `hand-codesign run` at many moments; count the processes that out
 The runner of a Task 5 run (2 evaluators) is killed at --kills moments spread from the start of
 its first process to --latest s later, well into the run (and with --sigterm terminated at as
 many); for each, how many of the run's processes were seen, how many still ran GRACE s later,
-and how long the last one took to end. test/test_orphans.py checks four moments in the suite.
+and how long the last one took to end. test/ros/test_orphans.py checks four moments in the suite.
 
 Usage: python bench/bench_orphans.py [--kills 10] [--latest 5.0] [--sigterm]
 """
@@ -17,7 +17,7 @@ import tempfile
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / 'test'))
+sys.path.insert(0, str(ROOT / 'test' / 'helpers'))
 
 from run_kills import describe  # noqa: E402, I100: a helper of the tests, not a package
 from run_kills import kill_run  # noqa: E402

@@ -24,6 +24,7 @@ import collections
 import dataclasses
 import pathlib
 import struct
+from typing import Dict, Iterable, List, Optional, Tuple, Union
 
 from hand_codesign.bag import cdr
 from hand_codesign.bag.files import bag_files
@@ -146,7 +147,7 @@ class RunRecord:
 
     path: str
     run_id: str
-    run_info: RunInfo           # None when the bag holds no RunInfo of the run
+    run_info: Optional[RunInfo]  # None when the bag holds no RunInfo of the run
     candidates: Table
     evaluations: Table
     evaluator_status: Table
@@ -490,14 +491,23 @@ def _choose_run(run_id, tables, warnings):
     return '', all_runs
 
 
-def read_topics(path, type_names):
+def read_topics(path: Union[str, pathlib.Path],
+                type_names: Iterable[str]) -> Tuple[Dict[str, 'Table'], List[str]]:
     """
-    Return ({type name: Table}, warnings) of every message of those types in the bag at path.
+    Return every message of those types in the bag at path, a Table per type.
 
     For the topics beside the loop's (the rig's trials); nested fields (a PoseStamped's
     header and pose) come as nested tuples, times as integer nanoseconds.
+
+    Args:
+        path: a .mcap file or a rosbag2 directory.
+        type_names: message types, e.g. 'hand_codesign_msgs/msg/TrialStatus'.
+
+    Returns:
+        ({type name: Table of its messages, one row each, in log time order}, warnings: one
+        line for each damaged part of the bag that was skipped).
     """
-    warnings = []
+    warnings: List[str] = []
     parts = collections.defaultdict(list)
     for file in _bag_files(pathlib.Path(path)):
         scan = scan_file(file, tuple(type_names))
@@ -510,13 +520,22 @@ def read_topics(path, type_names):
     return {name: _concatenate(parts[name]) for name in type_names}, warnings
 
 
-def read_run(path, run_id=None):
+def read_run(path: Union[str, pathlib.Path], run_id: Optional[str] = None) -> RunRecord:
     """
-    Return the RunRecord of one run of the bag at path (.mcap file or rosbag2 directory).
+    Return the RunRecord of one run of the bag at path.
 
-    run_id selects a run when the bag holds several (default: the first announced run);
-    messages of other runs are counted in ``message_counts`` and otherwise left out.
-    Raises BagError for a missing, empty, non-MCAP or foreign bag.
+    Args:
+        path: a .mcap file or a rosbag2 directory.
+        run_id: selects a run when the bag holds several (None: the first announced run);
+            messages of other runs are counted in ``message_counts`` and otherwise left out.
+
+    Returns:
+        The RunRecord: the run's RunInfo and a Table (one row per message) of its
+        candidates, evaluations (objectives in m and rad), evaluator statuses and
+        generation summaries, with log times in ns and the bag's warnings.
+
+    Raises:
+        BagError: for a missing, empty, non-MCAP or foreign bag.
     """
     path = pathlib.Path(path)
     files = _bag_files(path)
@@ -550,7 +569,7 @@ def read_run(path, run_id=None):
             f'{found or "no topics"}, expected topics of types {", ".join(LOOP_TYPES)} as '
             'written by the hand_codesign recorder')
 
-    message_counts = {}
+    message_counts: Dict[str, int] = {}
     for scan in scans:
         for channel_id, channel in scan.channels.items():
             message_counts[channel.topic] = (message_counts.get(channel.topic, 0)

@@ -46,6 +46,7 @@ import os
 import pathlib
 import re
 import time
+from typing import Any, Collection, Dict, Optional, Sequence, Tuple, Union
 
 from ament_index_python.packages import get_package_share_directory
 from ament_index_python.packages import PackageNotFoundError
@@ -202,7 +203,7 @@ def qos_profile_dict(profile):
     }
 
 
-def qos_profiles_yaml(profiles):
+def qos_profiles_yaml(profiles: Sequence[Any]) -> str:
     """
     Return the ``offered_qos_profiles`` text of a channel: a YAML list, '' for none.
 
@@ -229,14 +230,23 @@ class BagWriter:
     the last chunk, the summary and the footer.
     """
 
-    def __init__(self, path, chunk_size=1024 * 1024, compression='zstd', file_index=0,
-                 skip=()):
+    def __init__(self, path: Union[str, pathlib.Path], chunk_size: int = 1024 * 1024,
+                 compression: str = 'zstd', file_index: int = 0,
+                 skip: Collection[Tuple[str, bytes]] = ()) -> None:
         """
         Create the bag at path: 'x.mcap' is one file, any other path a bag directory.
 
-        file_index > 0 continues an existing bag directory with its file <name>_<index>.mcap,
-        and write() leaves out the messages whose message_key is in skip (what the earlier
-        files hold): bag.recovery.continue_bag, for a restarted recorder.
+        Args:
+            path: the bag: a file ending in .mcap, or a directory (created; one that holds a
+                bag already is refused).
+            chunk_size: bytes of messages kept in memory before a chunk is written.
+            compression: of the chunks: 'zstd', 'lz4' or 'none'.
+            file_index: > 0 continues an existing bag directory with its file
+                <name>_<index>.mcap (bag.recovery.continue_bag, for a restarted recorder).
+            skip: message_keys of messages write() leaves out (what the earlier files hold).
+
+        Raises:
+            BagWriteError: for an unknown compression or a bag that cannot be created.
         """
         self.bag_path = pathlib.Path(path)
         if self.bag_path.suffix == '.mcap':
@@ -268,11 +278,11 @@ class BagWriter:
         self._stream.flush()   # a writer killed before its first flush leaves an MCAP file
         self._skip = skip
         self.skipped = 0
-        self._schema_ids = {}
-        self._channels = {}
-        self.message_counts = {}
-        self.first_time = None
-        self.last_time = None
+        self._schema_ids: Dict[str, int] = {}
+        self._channels: Dict[str, Tuple[int, str, str]] = {}  # topic -> id, type, QoS
+        self.message_counts: Dict[str, int] = {}
+        self.first_time: Optional[int] = None  # ns
+        self.last_time: Optional[int] = None
         self._unflushed = 0
         self.closed = False
 
@@ -298,11 +308,20 @@ class BagWriter:
         """Return whether a channel exists for topic."""
         return topic in self._channels
 
-    def add_topic(self, topic, type_name, offered_qos_profiles=''):
+    def add_topic(self, topic: str, type_name: str,
+                  offered_qos_profiles: Union[str, Sequence[Any]] = '') -> None:
         """
         Create the channel of topic (and the schema of its type) unless it exists.
 
-        offered_qos_profiles: the YAML text of ``qos_profiles_yaml`` or a list of profiles.
+        Args:
+            topic: the topic's name, e.g. '/candidates'.
+            type_name: its message type, e.g. 'hand_codesign_msgs/msg/Candidate'; its
+                definition is looked up on AMENT_PREFIX_PATH.
+            offered_qos_profiles: the YAML text of ``qos_profiles_yaml`` or a list of
+                profiles.
+
+        Raises:
+            DefinitionError: when the type's definition cannot be found.
         """
         self._check_open()
         if topic in self._channels:
@@ -321,8 +340,20 @@ class BagWriter:
         self._channels[topic] = (channel_id, type_name, offered_qos_profiles)
         self.message_counts[topic] = 0
 
-    def write(self, topic, data, log_time=None, publish_time=None):
-        """Append one serialized message of topic (times in ns since the epoch) unless skipped."""
+    def write(self, topic: str, data: bytes, log_time: Optional[int] = None,
+              publish_time: Optional[int] = None) -> None:
+        """
+        Append one serialized message of topic unless skipped.
+
+        Args:
+            topic: a topic added with add_topic.
+            data: the message serialized as CDR (rclpy.serialization.serialize_message).
+            log_time: ns since the epoch; None: now.
+            publish_time: ns since the epoch; None: log_time.
+
+        Raises:
+            BagWriteError: for a topic without a channel or a closed writer.
+        """
         self._check_open()
         channel = self._channels.get(topic)
         if channel is None:
@@ -351,7 +382,7 @@ class BagWriter:
             self._writer.flush()
             self._unflushed = 0
 
-    def close(self):
+    def close(self) -> None:
         """Write the last chunk, the summary and the footer (and metadata.yaml); idempotent."""
         if self.closed:
             return

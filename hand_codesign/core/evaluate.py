@@ -30,8 +30,9 @@ Its per-world arrays stack the engines' rows, engine by engine.
 """
 
 from dataclasses import dataclass, field
-from typing import Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, Optional, Sequence, Tuple
 
+from hand_codesign.core.design import Design
 from hand_codesign.core.outcomes import OutcomeWatch, task_outcomes
 from hand_codesign.core.sim.hand import hand_model
 from hand_codesign.core.sim.objectives import (COLLISION_PENALTY, combine_worlds,
@@ -39,9 +40,14 @@ from hand_codesign.core.sim.objectives import (COLLISION_PENALTY, combine_worlds
                                                weighted_fitness)
 from hand_codesign.core.sim.policies import make_policy
 from hand_codesign.core.sim.pybullet_sim import Simulator
-from hand_codesign.core.sim.worlds import object_state, world_states
+from hand_codesign.core.sim.worlds import object_state, world_states, WorldState
 from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.spec import Task
 import numpy as np
+from numpy.typing import ArrayLike
+
+# called before each world's rollout: (index of the world, the simulator), or at its frames
+OnWorld = Callable[[int, Any], None]
 
 # h_o of every objective of a world whose simulation became unstable (NaN or exploding):
 # as bad as a collision, but only for that world, so the mean stays finite and ranks designs.
@@ -73,7 +79,7 @@ class Evaluation:
     outcomes: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
-_SIMULATORS = {}  # engine name -> this process's simulator of that engine
+_SIMULATORS: Dict[str, Any] = {}  # engine name -> this process's simulator of that engine
 
 
 def shared_simulator(engine='pybullet'):
@@ -136,55 +142,85 @@ class _TaskContext:
         return entry
 
 
-def evaluate(x, task, worlds: Optional[Sequence] = None, on_world=None,
-             share: Optional[Tuple[int, int]] = None) -> 'Evaluation':
+def evaluate(x: ArrayLike, task: Task, worlds: Optional[Sequence[WorldState]] = None,
+             on_world: Optional[OnWorld] = None,
+             share: Optional[Tuple[int, int]] = None) -> Evaluation:
     """
     Return the Evaluation of normalized genome x on `task` (default worlds: the task's).
 
-    x: the normalized genome, array-like of shape (genome_spec(task).size,), values folded
-    into [0, 1] (outside values are mirrored back, never rejected). task: a core.task.Task,
-    whose physics.engine chooses the simulator. worlds: WorldStates (core.sim.worlds) to
-    evaluate on, default world_states(task), the task's num_world_states training worlds.
-    `on_world(index, simulator)`, if given, is called before each world's rollout: a caller
-    that must stay responsive (an evaluator's heartbeats) does its chores there.
-    share: (first, end), a racing round's share of those worlds (core.search.racing): only
-    worlds first..end-1 are simulated and scored, while the starts of all of them are checked
-    for collisions (a design that starts in collision in any of them scores COLLISION_PENALTY
-    in every round); None: all of them.
+    Deterministic: the same x, task, worlds and share give the same bits in any process.
 
-    The Evaluation holds `objectives` (shape (objectives,), in task.objective_names' order:
-    position errors in m, orientation errors in rad, eq. 5 over the worlds with the torque
-    penalty), `fitness` (their sum weighted by task.objective_weights), `world_objectives`
-    (shape (worlds, objectives), the share's worlds), `initial_errors` and `final_errors`
-    (shape (worlds, 2): m, rad), `final_poses` (shape (worlds, 7): m, then a quaternion x, y,
-    z, w), the simulated time (s), the count of unstable worlds and whether the design starts
-    in collision (every objective then COLLISION_PENALTY). Deterministic: the same x, task,
-    worlds and share give the same bits in any process. Raises ValueError for a genome of the
-    wrong size.
+    Args:
+        x: the normalized genome, array-like of shape (genome_spec(task).size,), values
+            folded into [0, 1] (outside values are mirrored back, never rejected).
+        task: a core.task.Task, whose physics.engine chooses the simulator.
+        worlds: WorldStates (core.sim.worlds) to evaluate on; None: world_states(task), the
+            task's num_world_states training worlds.
+        on_world: if given, `on_world(index, simulator)` is called before each world's
+            rollout: a caller that must stay responsive (an evaluator's heartbeats) does its
+            chores there.
+        share: (first, end), a racing round's share of those worlds (core.search.racing):
+            only worlds first..end-1 are simulated and scored, while the starts of all of
+            them are checked for collisions (a design that starts in collision in any of
+            them scores COLLISION_PENALTY in every round); None: all of them.
+
+    Returns:
+        The Evaluation: `objectives` (shape (objectives,), in task.objective_names' order:
+        position errors in m, orientation errors in rad, eq. 5 over the worlds with the
+        torque penalty), `fitness` (their sum weighted by task.objective_weights),
+        `world_objectives` (shape (worlds, objectives), the share's worlds),
+        `initial_errors` and `final_errors` (shape (worlds, 2): m, rad), `final_poses`
+        (shape (worlds, 7): m, then a quaternion x, y, z, w), the simulated time (s), the
+        count of unstable worlds and whether the design starts in collision (every
+        objective then COLLISION_PENALTY).
+
+    Raises:
+        ValueError: for a genome of the wrong size.
     """
     design = _TaskContext.of(task).genome_spec().decode(np.asarray(x, dtype=float))
     return evaluate_design(design, task, worlds, on_world=on_world, share=share)
 
 
-def torque_penalty_of(x, task):
-    """Return eq. (2)'s torque penalty of normalized genome x on `task` (0 without one)."""
+def torque_penalty_of(x: ArrayLike, task: Task) -> float:
+    """
+    Return eq. (2)'s torque penalty of normalized genome x on `task` (0 without one).
+
+    Args:
+        x: the normalized genome, shape (genome_spec(task).size,), values in [0, 1].
+        task: a core.task.Task.
+
+    Returns:
+        The penalty added to every objective (the objectives' units: m or rad).
+    """
     design = _TaskContext.of(task).genome_spec().decode(np.asarray(x, dtype=float))
     return design_torque_penalty(task, design)
 
 
-def evaluate_design(design, task, worlds: Optional[Sequence] = None,
-                    simulator: Optional[Simulator] = None, on_frame=None, frame_every=1,
-                    on_world=None, share=None):
+def evaluate_design(design: Design, task: Task, worlds: Optional[Sequence[WorldState]] = None,
+                    simulator: Optional[Any] = None, on_frame: Optional[OnWorld] = None,
+                    frame_every: int = 1, on_world: Optional[OnWorld] = None,
+                    share: Optional[Tuple[int, int]] = None) -> Evaluation:
     """
-    Return the Evaluation of a Design on `task` (`worlds` and `share` as for `evaluate`).
+    Return the Evaluation of a Design on `task`, as `evaluate` does for a genome.
 
-    `simulator` defaults to the process-wide one of the task's engine (physics.engine). For
-    replay: `on_world(index, simulator)` is called before each world's rollout and
-    `on_frame(step, simulator)` at its frames (see Simulator.rollout).
+    Args:
+        design: the decoded design (core.design.Design): hand and controller.
+        task: a core.task.Task.
+        worlds: WorldStates to evaluate on, as for `evaluate`; None: the task's.
+        simulator: a core.sim Simulator or MujocoSimulator; None: the process-wide one of
+            the task's engine (physics.engine).
+        on_frame: for replay, `on_frame(step, simulator)` is called at the rollout's frames
+            (see Simulator.rollout).
+        frame_every: the steps (of task.time_step s) between two frames.
+        on_world: `on_world(index, simulator)` is called before each world's rollout.
+        share: (first, end), the worlds simulated and scored, as for `evaluate`.
 
-    A task in several engines (physics.engines, issue 47) is evaluated on the same worlds in
-    each of them, in the list's order, and scored by `across_engines`; a `simulator` given
-    simulates in its own engine only.
+    Returns:
+        The Evaluation, as `evaluate` returns it.
+
+    A task in several engines (physics.engines) is evaluated on the same worlds in each of
+    them, in the list's order, and scored by `across_engines`; a `simulator` given simulates
+    in its own engine only.
     """
     engines = task.physics.engines
     if simulator is not None or len(engines) == 1:

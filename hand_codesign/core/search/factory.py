@@ -5,23 +5,35 @@ The name-to-class registry sits here, above the classes it names (core.search.op
 core.search.restarts, core.search.quality_diversity), so that none of them needs this module.
 """
 
-from hand_codesign.core.search.optimizers import CmaEs, MoCmaEs, OptimizerError
+from typing import Optional
+
+from hand_codesign.core.search.optimizers import AskTellOptimizer, CmaEs, MoCmaEs, OptimizerError
 from hand_codesign.core.search.quality_diversity import ALGORITHMS as QD_ALGORITHMS
 from hand_codesign.core.search.restarts import ALGORITHMS as RESTART_ALGORITHMS
 from hand_codesign.core.task.descriptors import DesignDescriptors
 from hand_codesign.core.task.genome import seed_genome
 from hand_codesign.core.task.parts import ArchiveSpec
+from hand_codesign.core.task.spec import Task
+from numpy.typing import ArrayLike
 
 
-def make_optimizer(task, dim, first_id=0, seed_x=None, seed=None):
+def make_optimizer(task: Task, dim: int, first_id: int = 0, seed_x: Optional[ArrayLike] = None,
+                   seed: Optional[int] = None) -> AskTellOptimizer:
     """
     Return the optimizer of task.algorithm for a genome of `dim` normalized values.
 
-    task: a core.task.Task; dim: the genome's size (genome_spec(task).size); first_id: the id
-    of its first candidate; seed_x: a normalized genome of shape (dim,) to start from; seed: the
-    optimizer's seed instead of task.seed. Returns an ask/tell optimizer
-    (core.search.optimizers.AskTellOptimizer). Raises OptimizerError for an algorithm not in
-    the registry or settings it cannot take.
+    Args:
+        task: a core.task.Task.
+        dim: the genome's size (genome_spec(task).size).
+        first_id: the id of its first candidate.
+        seed_x: a normalized genome of shape (dim,), values in [0, 1], to start from.
+        seed: the optimizer's seed instead of task.seed.
+
+    Returns:
+        An ask/tell optimizer (core.search.optimizers.AskTellOptimizer).
+
+    Raises:
+        OptimizerError: for an algorithm not in the registry or settings it cannot take.
 
     cma and mocma are core.search.optimizers'; ipop-cma and bipop-cma (CMA-ES with restarts, which
     also take task.restart_stagnation) are core.search.restarts'; cma-mae and cma-me (quality

@@ -16,32 +16,41 @@ worlds chooses the run's result.
 """
 
 import dataclasses
+from typing import Any, Dict, List, Mapping, Optional
 
 from hand_codesign.core.search.factory import make_optimizer
 from hand_codesign.core.search.hierarchy import HierarchySearch
 from hand_codesign.core.search.horizon import Horizon
+from hand_codesign.core.search.optimizers import Candidate
 from hand_codesign.core.search.resampling import ResampledSearch
 from hand_codesign.core.search.stages import StagedSearch
 from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.spec import Task
 
 
 class Search:
     """
     The search of a task: its optimizer, or a HierarchySearch when the task has one.
 
-    Search(task, first_id=0) takes a core.task.Task (the run's, after its overrides) and the
-    id of its first candidate (a resumed run continues the ids). Driven as an ask/tell
-    optimizer: `ask()` returns the batch, a list of core.search.optimizers.Candidate (an id, a
-    generation, a normalized genome of shape (genome_spec(batch_task).size,) and the Variant
-    of the task it is evaluated on); `batch_task` is that Task; `tell({id: objectives})` takes
-    every candidate's objective vector (shape (objectives,), or an Evaluation); `stop()`
-    returns why it ended ({} while it goes on). `tell` raises TellError
-    (core.search.optimizers) for results that miss or add candidates of the batch; building
-    the search raises OptimizerError for an algorithm or a setting its optimizer cannot take.
+    Driven as an ask/tell optimizer: `ask()` returns the batch, a list of
+    core.search.optimizers.Candidate (an id, a generation, a normalized genome of shape
+    (genome_spec(batch_task).size,) and the Variant of the task it is evaluated on);
+    `batch_task` is that Task; `tell({id: objectives})` takes every candidate's objective
+    vector (shape (objectives,), or an Evaluation); `stop()` returns why it ended ({} while it
+    goes on). `tell` raises TellError (core.search.optimizers) for results that miss or add
+    candidates of the batch.
+
+    Args:
+        task: a core.task.Task, the run's after its overrides.
+        first_id: the id of its first candidate (a resumed run continues the ids).
+
+    Raises:
+        OptimizerError: for an algorithm or a setting its optimizer cannot take.
     """
 
-    def __init__(self, task, first_id=0):
+    def __init__(self, task: Task, first_id: int = 0) -> None:
         self.task = task
+        self._driver: Any
         if task.hierarchy is not None:
             self._driver = HierarchySearch(task, first_id=first_id)
         elif task.two_stage:
@@ -53,7 +62,7 @@ class Search:
         early = task.early_termination
         self._horizon = (Horizon(task) if early is not None and early.horizon is not None
                          and task.horizon is None else None)
-        self._batch = None
+        self._batch: Optional[List[Candidate]] = None
 
     @property
     def hierarchical(self):
@@ -112,8 +121,15 @@ class Search:
         history = self._horizon.history
         return history[generation] if generation < len(history) else self._horizon.current
 
-    def ask(self):
-        """Return the next batch, each candidate with its Variant (the same until told)."""
+    def ask(self) -> List[Candidate]:
+        """
+        Return the next batch, each candidate with its Variant (the same until told).
+
+        Returns:
+            The candidates of the batch (core.search.optimizers.Candidate): each an id, a
+            generation, a normalized genome of shape (genome_spec(batch_task).size,) with
+            values in [0, 1], and the Variant of the task it is evaluated on.
+        """
         if self._batch is None:
             task = self.batch_task
             horizon = self.horizon or 0.0
@@ -127,8 +143,18 @@ class Search:
                            for candidate in candidates]
         return list(self._batch)
 
-    def tell(self, results):
-        """Tell the objectives (id -> vector or Evaluation) of the whole batch."""
+    def tell(self, results: Mapping[int, Any]) -> None:
+        """
+        Tell the objectives of the whole batch.
+
+        Args:
+            results: candidate id -> its objective vector (shape (objectives,): m or rad, in
+                task.objective_names' order) or its core.evaluate.Evaluation, for every
+                candidate of the batch of `ask()`.
+
+        Raises:
+            TellError: (core.search.optimizers) for results that miss or add candidates.
+        """
         self._driver.tell(results)
         if self._horizon is not None:
             results = dict(results)
@@ -136,7 +162,14 @@ class Search:
                                         results[c.candidate_id]) for c in self.ask()])
         self._batch = None
 
-    def stop(self):
+    def stop(self) -> Dict[str, Any]:
+        """
+        Return why the search ended.
+
+        Returns:
+            The termination criteria met and their values (e.g. {'maxiter': 100}); empty
+            while the search goes on.
+        """
         return self._driver.stop()
 
     @property

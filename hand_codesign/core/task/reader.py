@@ -10,6 +10,8 @@ core.task.checks.
 """
 
 import dataclasses
+import os
+from typing import Union
 
 from hand_codesign.core.task.checks import check_task
 from hand_codesign.core.task.design_reader import DesignReader
@@ -21,15 +23,22 @@ from hand_codesign.core.task.values import join_key
 import yaml
 
 
-def load_task(path, warn_old_names=True):
+def load_task(path: Union[str, 'os.PathLike[str]'], warn_old_names: bool = True) -> Task:
     """
     Read and validate a task file: return its Task (core.task.spec), a frozen value.
 
-    path: a YAML task file (the schema and its SI units: hand_codesign.core.task);
-    warn_old_names: warn of a key's old name (False for a file that records a task, as a
-    campaign's pinned copy does, rather than one the user edits). Raises TaskError (a
-    ValueError) with one line naming the file, the dotted key and what was expected, for a
-    file that cannot be read, is not UTF-8 or YAML, or breaks the schema.
+    Args:
+        path: a YAML task file (its keys and their SI units: docs/TASK.md).
+        warn_old_names: warn of a key's old name (False for a file that records a task, as a
+            campaign's pinned copy does, rather than one the user edits).
+
+    Returns:
+        The Task, its lengths in m, angles in rad, times in s, masses in kg.
+
+    Raises:
+        TaskError: (a ValueError) one line naming the file, the dotted key and what was
+            expected, for a file that cannot be read, is not UTF-8 or YAML, or breaks the
+            schema.
     """
     try:
         with open(path, encoding='utf-8') as stream:
@@ -42,15 +51,22 @@ def load_task(path, warn_old_names=True):
     return parse_task(text, source=str(path), warn_old_names=warn_old_names)
 
 
-def parse_task(text, source='<task>', warn_old_names=False):
+def parse_task(text: str, source: str = '<task>', warn_old_names: bool = False) -> Task:
     """
     Validate YAML text into a Task (core.task.spec), as load_task does for a file.
 
-    text: the YAML of a task; source: what names it in errors (a path or 'run ID task'),
-    also the folder a seed design's file is read from. The Task keeps the text as
-    `source_text`. A key's old name (core.task.schema, Key.old) is read as its name, with a
-    warning if warn_old_names (a file the user edits; not a bag's record). Raises TaskError
-    naming source, the dotted key and what was expected.
+    Args:
+        text: the YAML of a task; the Task keeps it as `source_text`.
+        source: what names it in errors (a path or 'run ID task'), also the folder a seed
+            design's file is read from.
+        warn_old_names: a key's old name (core.task.schema, Key.old) is read as its name,
+            with a warning if True (a file the user edits; not a bag's record).
+
+    Returns:
+        The Task, as load_task returns it.
+
+    Raises:
+        TaskError: naming source, the dotted key and what was expected.
     """
     try:
         document = yaml.safe_load(text)
