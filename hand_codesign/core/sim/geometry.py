@@ -70,12 +70,10 @@ def link_frames(model, base_pose, angles=None):
     base_pose: the palm's (position, orientation); angles: joint angles (default: the initial
     ones). A link's frame sits at its joint; turning the joint turns it about the joint axis.
     """
-    angles = model.initial_angles if angles is None else angles
     frames = []
-    for link, angle in zip(model.links, angles):
+    for link, (_, _, joint) in zip(model.links, joint_transforms(model, angles)):
         parent = base_pose if link.parent < 0 else frames[link.parent]
-        frames.append(compose(parent, (link.joint_position,
-                                       axis_angle_quaternion(link.joint_axis, angle))))
+        frames.append(compose(parent, joint))
     return frames
 
 

@@ -198,53 +198,56 @@ def test_replay_poses_of_a_mujoco_run_are_mujoco_s(task):
         np.testing.assert_allclose(position, expected, atol=1e-12)
 
 
-@pytest.mark.parametrize('preset', ['task1.yaml', 'task2.yaml', 'task5.yaml'])  # each shape
-def test_a_world_written_into_the_model_is_the_model_compiled_for_it(preset):
+def worlds_written(preset):
+    """
+    Yield (task, model, simulator, state) for three worlds of a preset, in MuJoCo.
+
+    The preset's initial design is built once; each world is written over the one before
+    (turned and moved off the nominal start).
+    """
     task = on_mujoco(load_task(TASKS / preset))
     spec = genome_spec(task)
     model = hand_model(spec.decode(spec.initial_mean()).hand, task.hand)
-    shape = task.object_spec.shape
     with MujocoSimulator() as simulator:
         simulator.build(task, model)
-        for world in world_states(task, 3):  # each written over the one before
+        for world in world_states(task, 3):
             state = object_state(task, world)
-            simulator.reset(state, shape)
-            compiled = hand_spec(model, task.time_step, task.hand.base_position,
-                                 task.hand.base_orientation, shape,
-                                 task.policy.gravity_compensation)
-            compiled.memory = ARENA_BYTES
-            compiled.geom('object').size = list(_geom_size(shape, state.size)[0])
-            compiled.geom('object').friction = [model.friction * state.friction, 0.0, 0.0]
-            compiled.pair('object_ground').friction = [state.friction] * 2 + [0.0] * 3
-            body = compiled.body('object')
-            body.mass = state.mass
-            body.inertia = list(object_inertia(shape, state.size, state.mass))
-            body.pos = list(state.position)
-            x, y, z, w = state.orientation
-            body.quat = [w, x, y, z]
-            expected, written = compiled.compile(), simulator.mj_model
-            for name in dir(expected):
-                value = getattr(expected, name)
-                if isinstance(value, np.ndarray):
-                    np.testing.assert_array_equal(getattr(written, name), value, err_msg=name)
-            for name in ('meaninertia', 'meanmass', 'extent'):  # meansize: drawings only
-                assert getattr(written.stat, name) == getattr(expected.stat, name), name
+            simulator.reset(state, task.object_spec.shape)
+            yield task, model, simulator, state
+
+
+@pytest.mark.parametrize('preset', ['task1.yaml', 'task2.yaml', 'task5.yaml'])  # each shape
+def test_a_world_written_into_the_model_is_the_model_compiled_for_it(preset):
+    for task, model, simulator, state in worlds_written(preset):
+        shape = task.object_spec.shape
+        compiled = hand_spec(model, task.time_step, task.hand.base_position,
+                             task.hand.base_orientation, shape,
+                             task.policy.gravity_compensation)
+        compiled.memory = ARENA_BYTES
+        compiled.geom('object').size = list(_geom_size(shape, state.size)[0])
+        compiled.geom('object').friction = [model.friction * state.friction, 0.0, 0.0]
+        compiled.pair('object_ground').friction = [state.friction] * 2 + [0.0] * 3
+        body = compiled.body('object')
+        body.mass = state.mass
+        body.inertia = list(object_inertia(shape, state.size, state.mass))
+        body.pos = list(state.position)
+        x, y, z, w = state.orientation
+        body.quat = [w, x, y, z]
+        expected, written = compiled.compile(), simulator.mj_model
+        for name in dir(expected):
+            value = getattr(expected, name)
+            if isinstance(value, np.ndarray):
+                np.testing.assert_array_equal(getattr(written, name), value, err_msg=name)
+        for name in ('meaninertia', 'meanmass', 'extent'):  # meansize: drawings only
+            assert getattr(written.stat, name) == getattr(expected.stat, name), name
 
 
 @pytest.mark.parametrize('preset', ['task1.yaml', 'task2.yaml', 'task5.yaml'])  # each shape
 def test_the_object_s_centre_of_mass_and_inertia_axes_are_its_shape_s(preset):
-    task = on_mujoco(load_task(TASKS / preset))
-    spec = genome_spec(task)
-    model = hand_model(spec.decode(spec.initial_mean()).hand, task.hand)
-    shape = task.object_spec.shape
-    with MujocoSimulator() as simulator:
-        simulator.build(task, model)
-        for world in world_states(task, 3):  # turned and moved off the nominal start
-            state = object_state(task, world)
-            simulator.reset(state, shape)
-            m, d = simulator.mj_model, simulator.mj_data
-            mujoco.mj_kinematics(m, d)
-            body, geom = simulator._object_body, simulator._object_geom
-            np.testing.assert_allclose(d.xipos[body], d.geom_xpos[geom], atol=1e-12)
-            np.testing.assert_allclose(d.xipos[body], state.position, atol=1e-12)
-            np.testing.assert_allclose(d.ximat[body], d.geom_xmat[geom], atol=1e-12)
+    for task, model, simulator, state in worlds_written(preset):
+        m, d = simulator.mj_model, simulator.mj_data
+        mujoco.mj_kinematics(m, d)
+        body, geom = simulator._object_body, simulator._object_geom
+        np.testing.assert_allclose(d.xipos[body], d.geom_xpos[geom], atol=1e-12)
+        np.testing.assert_allclose(d.xipos[body], state.position, atol=1e-12)
+        np.testing.assert_allclose(d.ximat[body], d.geom_xmat[geom], atol=1e-12)
