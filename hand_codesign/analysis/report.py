@@ -191,6 +191,7 @@ class Report:
             if info.resumed_from:
                 facts.append(('resumed from', info.resumed_from))
             facts += restart_facts(self.restarts)
+            facts += racing_facts(record)
             facts += self.archive_facts()
         else:
             facts.append(('task', '(unknown: the bag holds no RunInfo)'))
@@ -497,3 +498,20 @@ class Report:
                          + [f'{generations.best_fitness[index]:.4g}',
                             '' if evaluations != evaluations else str(int(evaluations))])
         return aligned_table(table)
+
+
+def racing_facts(record):
+    """
+    Return [('racing', text)]: the rollouts a raced run ran and saved, else [].
+
+    A raced run's summaries record the worlds each told candidate met (core.search.racing);
+    the rollouts saved are the worlds the candidates stopped early did not meet.
+    """
+    met = records.told_worlds(record)
+    if not met:
+        return []
+    ran = sum(count for count, _ in met.values())
+    whole = sum(most for _, most in met.values())
+    stopped = sum(1 for count, most in met.values() if count < most)
+    return [('racing', f'{ran} of {whole} rollouts run ({stopped} of {len(met)} candidates '
+                       f'stopped early: {1 - ran / whole:.1%} of the rollouts saved)')]

@@ -68,3 +68,12 @@ def test_a_raced_run_is_the_same_with_one_and_two_evaluators(tmp_path):
     assert design.world_objectives.shape == (4, 2)
     point = resume_point(record, iterations=3)
     assert point.evaluations_told == 16 and not point.known
+    # what `analyze` tells a user: the rollouts the race ran and saved
+    analyzed = subprocess.run([sys.executable, '-m', 'hand_codesign.cli', 'analyze',
+                               str(tmp_path / 'one'), '--out', str(tmp_path / 'report')],
+                              cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert analyzed.returncode == 0, analyzed.stderr
+    stopped = sum(1 for count in worlds if count < 4)
+    assert (f'{int(sum(worlds))} of 64 rollouts run ({stopped} of 16 candidates stopped early: '
+            f'{1 - sum(worlds) / 64:.1%} of the rollouts saved)'
+            in (tmp_path / 'report' / 'report.md').read_text())
