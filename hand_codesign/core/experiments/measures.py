@@ -295,7 +295,7 @@ def _measure_chunk(job):
         # a collision in one world marks the whole chunk: find the worlds that collide
         parts = [_measure_chunk((x, task, (world,))) for world in worlds]
         return tuple(np.concatenate(column) for column in zip(*parts))
-    simulated = ~evaluation.collision
+    simulated = not evaluation.collision   # a bool: ~ of a Python bool is -1, an int mask
     return (evaluation.initial_errors, evaluation.final_errors, evaluation.final_poses,
             np.full(len(worlds), evaluation.collision), watch.flags & simulated,
             watch.reached & simulated, watch.touched & simulated, watch.touching & simulated)

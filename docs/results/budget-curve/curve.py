@@ -1,0 +1,96 @@
+"""
+A budget curve: one run's design measured on unseen worlds after each share of its budget.
+
+Each BAG is a run continued from the one before (`hand-codesign run --resume BAG
+--iterations N`), so its design is the design a run of N generations ends with. Each is
+measured on --unseen worlds (the run seed's unseen stream, as `reproduce` measures) under the
+experiment's tolerance, with the project's measures (hand_codesign.campaign.measures), and the
+per-world measures are cached beside the table as BAGNAME.json (a rerun reads them back).
+
+Usage (from the repository's root):
+    .venv/bin/python docs/results/budget-curve/curve.py --tolerance plane --limit 0.005 \
+        --table-i 100 --out docs/results/budget-curve/task5 BAG ...
+
+Writes OUT.md (generations, rollouts run, the share of Table I's budget, within tolerance,
+median and p90 of the error, the run's wall time) and OUT.png (within against rollouts).
+"""
+
+import argparse
+import json
+import pathlib
+
+from hand_codesign.analysis import records
+from hand_codesign.analysis.figures import load_pyplot
+from hand_codesign.campaign.measures import measure_bag
+from hand_codesign.core.experiments.measures import Tolerance
+
+
+def rollouts_run(record):
+    """Return the rollouts the run ran: every told candidate's worlds (racing counted)."""
+    info = record.run_info
+    met = records.told_worlds(record)
+    if met:
+        return sum(count for count, _ in met.values())
+    return info.iterations * info.population * info.world_states
+
+
+def wall_minutes(bags):
+    """Return the wall time of the run up to each bag, in minutes (its parts summed)."""
+    total, times = 0.0, []
+    for bag in bags:
+        summary = records.last_summary(records.open_run(bag, warn=False))
+        total += float(summary['wall_time']) / 60
+        times.append(total)
+    return times
+
+
+def measured(bag, tolerance, unseen, cache):
+    """Return the bag's design measures, read from cache if measured before."""
+    if cache.exists():
+        return json.loads(cache.read_text())
+    values = measure_bag(bag, tolerance, unseen)
+    cache.write_text(json.dumps(values))
+    return values
+
+
+def main():
+    """Measure each bag, write the table and the figure."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
+    parser.add_argument('bags', nargs='+', metavar='BAG')
+    parser.add_argument('--tolerance', required=True, help='error kind: plane, orientation, pose')
+    parser.add_argument('--limit', type=float, required=True, help='m or rad (pose: 1)')
+    parser.add_argument('--table-i', type=int, required=True, help="Table I's generations")
+    parser.add_argument('--unseen', type=int, default=1000)
+    parser.add_argument('--out', required=True, help='table and figure path, without suffix')
+    arguments = parser.parse_args()
+    out = pathlib.Path(arguments.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tolerance = Tolerance(arguments.tolerance, arguments.limit)
+    lines = ['| generations | rollouts run | of Table I | within | median | p90 | wall (min) |',
+             '|---|---|---|---|---|---|---|']
+    points = []
+    for bag, minutes in zip(arguments.bags, wall_minutes(arguments.bags)):
+        record = records.open_run(bag, warn=False)
+        info = record.run_info
+        rollouts = rollouts_run(record)
+        whole = arguments.table_i * info.population * info.world_states
+        cache = out.parent / f'{out.name}-{pathlib.Path(bag).name}.json'
+        summary = measured(bag, tolerance, arguments.unseen, cache)['summary']
+        lines.append(f"| {info.iterations} | {rollouts:,} | {rollouts / whole:.2f} | "
+                     f"{summary['within']:.1%} | {summary['median']:.4g} | "
+                     f"{summary['p90']:.4g} | {minutes:.1f} |")
+        points.append((rollouts / whole, summary['within']))
+    out.with_suffix('.md').write_text('\n'.join(lines) + '\n')
+    pyplot = load_pyplot()
+    figure, axes = pyplot.subplots(figsize=(5, 3.2))
+    axes.plot(*zip(*points), marker='o')
+    axes.set_xscale('log', base=2)
+    axes.set_xlabel("rollouts, as a share of Table I's budget")
+    axes.set_ylabel(f'unseen worlds within {tolerance.describe()}')
+    figure.tight_layout()
+    figure.savefig(out.with_suffix('.png'), dpi=120)
+    print('\n'.join(lines))
+
+
+if __name__ == '__main__':
+    main()
