@@ -115,7 +115,9 @@ class NativePD:
         `policy`'s joints are the scene's first qpos and dof entries; `num_steps`, the steps
         of the rollout, gives the law a row of targets (rad) and target speeds (rad/s) each.
         """
-        targets, velocities = policy.track(num_steps)
+        # policy.track's rows as arrays: track turns these into lists for the Python law,
+        # and turning lists back into arrays cost 1 % of an evaluation
+        targets, velocities = policy.target_at(np.arange(num_steps) * policy.time_step)
         self.arrays = (np.ascontiguousarray(policy.step_gains(), dtype=np.float64),
                        np.ascontiguousarray(targets, dtype=np.float64),
                        np.ascontiguousarray(velocities, dtype=np.float64))
