@@ -476,10 +476,8 @@ class MujocoSimulator(EventPlans):
             self._scratch = mujoco.MjData(m)
         native = self._native(policy, plan.num_steps)
         if native is not None:
-            def advance_native(done, stop):
-                native.advance(m, d, self._scratch, done, stop)
-            return play(plan, trace, state, advance_native, self.object_pose, self._stable,
-                        on_frame, self)
+            return play(plan, trace, state, native.advancer(m, d, self._scratch),
+                        self.object_pose, self._stable, on_frame, self)
         torques = mujoco_torques(policy, m, d, plan.num_steps, self._scratch)
         until = self._holds(policy, plan.num_steps)
         joints = self._joints
