@@ -107,9 +107,10 @@ static void pd_torques(const mjModel* m, mjData* d, mjData* s, const hc_pd_law* 
  * for bit, with the torques set from the state at the step's start, as the Python loop does.
  *
  * MuJoCo's profiler is off meanwhile: the Python bindings install a wall clock as mjcb_time
- * when they make an mjData, and the engine reads it about 30 times a step, 8 % of a step of
- * these small scenes. It only fills d->timer, which nothing here reads; the physics is the
- * same bit for bit. The clock is put back, so the rest of the process keeps its timers.
+ * when they make an mjData, and the engine reads it about 30 times a step, a tenth of an
+ * evaluation of these small scenes. It only fills d->timer, which nothing here reads; the
+ * physics is the same bit for bit. The clock is put back for the rest of the process (two
+ * threads stepping at once could at worst leave the profiler off).
  */
 int hc_pd_advance(const mjModel* m, mjData* d, mjData* s, const hc_pd_law* law,
                   int from, int to) {
