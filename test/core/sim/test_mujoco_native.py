@@ -1,5 +1,6 @@
 """Eq. (1)'s PD law stepped in C on MuJoCo: the bits of the law in Python, or that law itself."""
 
+import ctypes
 import dataclasses
 import pathlib
 
@@ -7,6 +8,7 @@ from hand_codesign.core import genome_spec, load_task
 from hand_codesign.core.evaluate import evaluate_design
 from hand_codesign.core.sim import mujoco_native
 from hand_codesign.core.sim.mujoco_sim import MujocoSimulator
+import mujoco
 import numpy as np
 import pytest
 
@@ -44,6 +46,25 @@ def test_the_law_in_c_gives_the_bits_of_the_law_in_python(preset):
             assert fast.simulated_time > 0
             np.testing.assert_array_equal(fast.world_objectives, slow.world_objectives)
             np.testing.assert_array_equal(fast.final_poses, slow.final_poses)
+
+
+@pytest.mark.skipif(mujoco_native.library() is None,
+                    reason=f'no C compiler here: {mujoco_native.unavailable_reason()}')
+def test_the_c_loop_steps_without_the_profiler_and_gives_its_clock_back():
+    clock = ctypes.c_void_p.in_dll(ctypes.CDLL(str(mujoco_native._mujoco_paths()[1])),
+                                   'mjcb_time')
+    task = on_mujoco(load_task(TASKS / 'task5_pd.yaml').replace(num_world_states=1))
+    design = simulated_designs(task, 1)[0]
+    step = mujoco.mjtTimer.mjTIMER_STEP
+    with MujocoSimulator() as simulator:
+        evaluate_design(design, task, simulator=simulator)
+        installed = clock.value  # the bindings' clock, installed with the first MjData
+        evaluate_design(design, task, simulator=simulator)
+        d = simulator.mj_data
+        assert installed and clock.value == installed
+        assert d.timer[step].number > 0 and d.timer[step].duration == 0
+        mujoco.mj_step(simulator.mj_model, d)
+        assert d.timer[step].duration > 0
 
 
 def test_without_a_compiler_the_law_steps_in_python(tmp_path, monkeypatch):
