@@ -82,8 +82,8 @@ def _check_contact(task, fail):
     if (contact.stiffness is None) != (contact.damping is None):
         given, missing = (('stiffness', 'damping') if contact.damping is None
                           else ('damping', 'stiffness'))
-        fail(f'physics.contact.{missing}', f'a range beside {given} (Bullet\'s changeDynamics '
-             'and MuJoCo\'s direct solref take stiffness and damping as a pair)')
+        fail(f'physics.contact.{missing}', f"a range beside {given} (Bullet's changeDynamics "
+             "and MuJoCo's direct solref take stiffness and damping as a pair)")
     if 'mujoco' in task.physics.engines:
         _check_mujoco_contact(task, contact, fail)
 

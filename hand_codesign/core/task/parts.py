@@ -408,7 +408,7 @@ class PhysicsSpec:
     # while randomization holds the object's seven quantities that Fig. 3's grid spans
     contact: Optional[ContactSpec] = key(
         "ranges of the object's contact parameters, drawn per world and applied in every "
-        'engine (none: the engines\' own contact)', 'section', section=ContactSpec,
+        "engine (none: the engines' own contact)", 'section', section=ContactSpec,
         default=None, read='contact_section')
 
     def __post_init__(self):

@@ -214,7 +214,7 @@ class _Reader(SettingsReader, DesignReader):
         contact = ContactSpec(**self.section(ContactSpec, value, key))
         if not contact.ranges():
             self.fail(key, f'at least one of {", ".join(CONTACT_PARAMETERS)} (or no contact '
-                      'key: the engines\' own contact)', value)
+                      "key: the engines' own contact)", value)
         return contact
 
     def contact_range(self, spec, value, key):
