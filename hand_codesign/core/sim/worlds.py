@@ -12,6 +12,10 @@ Streams of one seed, as numpy SeedSequence entropy: [seed] the fixed (training) 
 worlds of core.experiments.measures, [seed, RESAMPLE_STREAM, k] the k-th draw. SeedSequence pads
 entropy with zeros, so [seed, s] is [seed, s, 0]: k starts at 1, and RESAMPLE_STREAM is neither 0,
 1 nor 11, so no draw repeats another stream (test_worlds compares the values).
+With `physics.contact` each world also draws its contact parameters (`with_contact`), from its
+set's entropy with CONTACT_STREAM (31) appended ([seed, 31], [seed, 1, 31], [seed, 11, 31],
+[seed, 21, k, 31]): a generator of their own, so the seven quantities above stay as they were.
+The nominal world of stage 1 and the grid's worlds draw none: they meet the engines' own contact.
 `grid_world_states(task, 5)` puts every randomized quantity (a range of non-zero width) at 5
 evenly spaced values, all combinations: the robustness grid of Fig. 3 (Task 4 randomizes six
 quantities: 5^6 = 15,625 worlds). `object_state(task, world)` is the object's initial state

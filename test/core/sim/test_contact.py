@@ -11,7 +11,10 @@ less, a restitution makes a dropped box bounce. Tiny scenes: a few worlds, short
 import math
 import pathlib
 
+from hand_codesign.commands.check import worlds_text
 from hand_codesign.core.evaluate import evaluate, evaluate_design
+from hand_codesign.core.experiments.measures import unseen_world_states
+from hand_codesign.core.run.preview import preview
 from hand_codesign.core.sim.mujoco_sim import bouncing_solref, contact_solref, stiff_solref
 from hand_codesign.core.sim.worlds import ContactState, QUANTITIES, world_states, WorldState
 from hand_codesign.core.task import parse_task, TaskError
@@ -126,9 +129,11 @@ def test_each_world_draws_its_own_contact_in_the_ranges_deterministically():
                       worlds=16)
     assert [w.contact.restitution for w in world_states(fewer)] == [
         w.contact.restitution for w in worlds]
-    # held-out worlds draw theirs from their own stream too
-    held_out = world_states(task.replace(held_out=True))
-    assert [w.contact for w in held_out] != [w.contact for w in worlds]
+    # every set of worlds draws its own: held out, unseen, resampled
+    sets = [worlds, world_states(task.replace(held_out=True)), unseen_world_states(task, 16),
+            world_states(task.replace(world_draw=1)), world_states(task.replace(world_draw=2))]
+    stiffnesses = [w.contact.stiffness for each in sets for w in each]
+    assert len(set(stiffnesses)) == len(stiffnesses)
 
 
 def test_the_section_leaves_the_seven_quantities_of_every_world_as_they_were():
@@ -211,3 +216,15 @@ def test_mujoco_maps_stiffness_per_kg_and_restitution_to_a_damping_ratio():
     assert bouncing_solref(0.5, step)[1] == pytest.approx(-200.0 * ratio)
     geom, pair = contact_solref(ContactState(restitution=0.5), 0.03, step)
     assert geom == stiff_solref(step) and pair == bouncing_solref(0.5, step)
+
+
+def test_the_preview_lists_each_worlds_draw_and_check_shows_it():
+    task = task_with({'engine': 'pybullet', 'contact': SOFT}, worlds=2)
+    summary = preview(task)
+    drawn = [world.contact for world in world_states(task)]
+    assert [entry['contact'] for entry in summary['worlds']] == [
+        {'stiffness': c.stiffness, 'damping': c.damping} for c in drawn]
+    text = worlds_text(summary)
+    assert 'draws its contact (physics.contact): stiffness (N/m), damping (N s/m)' in text
+    assert f'{drawn[1].stiffness:.4g}' in text
+    assert 'contact' not in preview(task_with({}, worlds=2))['worlds'][0]
