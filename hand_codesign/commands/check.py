@@ -191,6 +191,9 @@ def objective_lines(summary):
     return '\n'.join(lines)
 
 
+CONTACT_UNITS = {'stiffness': 'N/m', 'damping': 'N s/m', 'restitution': 'a coefficient'}
+
+
 def worlds_text(summary):
     worlds = summary['worlds']
     ranges = summary['randomization']['ranges']
@@ -201,9 +204,14 @@ def worlds_text(summary):
     lines = [wrap(f'worlds: {len(worlds)} training worlds of seed {summary["seed"]}; '
                   f'randomized: {varied or "nothing"} (position: m added; orientation: rad '
                   f'about {axis}; friction: added; scale, mass: factors)')]
-    rows = [['world'] + names + ['start position (m)', 'start orientation (x y z w)']]
+    contact = list(worlds[0].get('contact', {})) if worlds else []  # physics.contact
+    if contact:
+        units = ', '.join(f'{name} ({CONTACT_UNITS[name]})' for name in contact)
+        lines.append(wrap(f'  each world also draws its contact (physics.contact): {units}'))
+    rows = [['world'] + names + contact + ['start position (m)', 'start orientation (x y z w)']]
     for world in worlds:
         rows.append([str(world['index'])] + [f'{world[name]:.4g}' for name in names]
+                    + [f'{world["contact"][name]:.4g}' for name in contact]
                     + [_vector(world['start']['position']),
                        _vector(world['start']['orientation'])])
     lines.append(indent(table(rows), 2))

@@ -56,7 +56,7 @@ from hand_codesign.core.evaluate import _TaskContext, evaluate_design
 from hand_codesign.core.experiments.robustness import map_chunks, start_and_goal_poses
 from hand_codesign.core.outcomes import (limit_rests, on_its_limit, reached_its_limit,
                                          touching_links)
-from hand_codesign.core.sim.worlds import WorldState
+from hand_codesign.core.sim.worlds import with_contact, WorldState
 import numpy as np
 
 UNSEEN_STREAM = 11  # second entropy word of the unseen worlds' SeedSequence
@@ -107,7 +107,8 @@ def unseen_world_states(task, count):
     bounds = [bounds for _, bounds in task.randomization.quantities()]
     lower = np.array([bound.lower for bound in bounds])
     width = np.array([bound.width for bound in bounds])
-    return [WorldState.from_values(row) for row in lower + uniform * width]
+    worlds = [WorldState.from_values(row) for row in lower + uniform * width]
+    return with_contact(task, worlds, [int(task.seed), UNSEEN_STREAM])
 
 
 @dataclasses.dataclass(frozen=True)

@@ -44,6 +44,8 @@ would meet before simulating (a bad task file, a genome or hierarchy that cannot
 optimizer that refuses the budget) raise TaskError, HierarchyError or OptimizerError here.
 """
 
+import dataclasses
+
 from hand_codesign.core.experiments.robustness import world_values
 from hand_codesign.core.search.factory import make_optimizer
 from hand_codesign.core.search.hierarchy import bottom_up_path
@@ -300,6 +302,9 @@ def worlds(task, schedule):
         entry.update(zip(QUANTITIES, (float(value) for value in world_values(world))))
         entry['object'] = {'mass': state.mass, 'friction': state.friction,
                            'size': list(state.size)}
+        if world.contact is not None:  # physics.contact: the parameters this world drew
+            entry['contact'] = {name: value for name, value in
+                                dataclasses.asdict(world.contact).items() if value is not None}
         entry['start'] = {'position': _floats(state.position),
                           'orientation': _floats(state.orientation)}
         entry['goals'] = world_goals(task, schedule, state)

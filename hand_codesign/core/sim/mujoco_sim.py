@@ -92,6 +92,60 @@ def stiff_solref(time_step):
     return (2.0 * time_step, SOLREF_DAMPING_RATIO)
 
 
+def contact_solref(contact, mass, time_step):
+    """
+    Return the solref of the object's geom and of its ground pair for a world's contact.
+
+    Args:
+        contact: the world's core.sim.worlds.ContactState, or None (the stiff default).
+        mass: the world's object mass (kg).
+        time_step: the task's time step (s).
+
+    Returns:
+        (geom solref, pair solref): the geom's sets the object's contacts with the hand (its
+        priority wins over the hand's), the pair's those with the ground.
+
+    Why these maps (the differences are genuine modelling choices of the engines):
+    - stiffness K (N/m), damping D (N s/m): MuJoCo's direct solref (-k, -b) is a reference
+      acceleration per metre and per m/s, so k = K / m and b = D / m with the object's mass:
+      against the immovable ground that is the spring-damper's own frequency sqrt(K / m) and
+      damping ratio D / (2 sqrt(K m)). Against a finger the effective mass is smaller. Unlike
+      Bullet's spring per contact point, MuJoCo's acts on the constraint as a whole (four
+      corners are not four times as stiff), and its impedance (SOLIMP near 1) lets the spring
+      carry only (1 - d) / d of a steady load: an object sinks far less at rest than in
+      Bullet, while its impact rings alike.
+    - restitution e: MuJoCo has none apart from the contact's damping, so e sets the damping
+      ratio z of a damped oscillator whose bounce is e, z = -ln e / sqrt(pi^2 + ln^2 e), at
+      the stiffness of the default contact (a time constant of two steps); the bounce ends
+      once the constraint stops pushing, a little before the spring is back at rest, so it is
+      a little lower than e, and there is no velocity threshold as in Bullet. Only the ground
+      pair bounces, as in Bullet (core.sim.pybullet_sim.Simulator._set_contact).
+    """
+    stiff = stiff_solref(time_step)
+    if contact is None:
+        return stiff, stiff
+    if contact.stiffness is not None:
+        if contact.restitution is not None:
+            raise ValueError('physics.contact: MuJoCo takes a damping or a restitution, not both '
+                             '(its restitution is the damping)')
+        direct = (-contact.stiffness / mass, -contact.damping / mass)
+        return direct, direct
+    if contact.restitution is None:
+        return stiff, stiff
+    return stiff, bouncing_solref(contact.restitution, time_step)
+
+
+def bouncing_solref(restitution, time_step):
+    """Return the direct solref whose damping ratio bounces by `restitution` (see above)."""
+    stiffness = 1.0 / (2.0 * time_step) ** 2  # the default contact's (stiff_solref)
+    if restitution <= 0.0:
+        ratio = 1.0
+    else:
+        log = math.log(restitution)
+        ratio = -log / math.sqrt(math.pi ** 2 + log ** 2)
+    return (-stiffness, -2.0 * ratio * math.sqrt(stiffness))
+
+
 def object_inertia(shape, size, mass):
     """
     Return the diagonal inertia (kg m^2) of the object about its centre, as Bullet has it.
@@ -351,6 +405,8 @@ class MujocoSimulator(EventPlans):
         m.geom_friction[geom, 0] = self.model.friction * state.friction
         m.pair_friction[self._object_pair] = (state.friction, state.friction, 0.0, 0.0, 0.0)
         m.body_mass[body] = state.mass
+        m.geom_solref[geom], m.pair_solref[self._object_pair] = contact_solref(
+            state.contact, state.mass, self.task.time_step)
         m.body_inertia[body] = object_inertia(shape, state.size, state.mass)
         orientation = _wxyz(state.orientation)
         m.body_pos[body] = state.position

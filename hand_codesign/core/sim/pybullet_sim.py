@@ -136,6 +136,11 @@ class Simulator(EventPlans):
         self.ground = client.createMultiBody(
             0.0, ground_shape, basePosition=(0.0, 0.0, -GROUND_HALF_EXTENTS[2]))
         client.changeDynamics(self.ground, -1, lateralFriction=GROUND_FRICTION)
+        contact = physics.contact
+        if contact is not None and contact.restitution is not None:
+            # Bullet multiplies the two bodies' restitutions: a ground of 1 leaves the object's
+            # own coefficient to its bounce, while the hand's (0) keeps fingers from bouncing
+            client.changeDynamics(self.ground, -1, restitution=1.0)
         self.hand = build_hand(client, model, model.base_position, model.base_orientation)
         self.task, self.model = task, model
         self._joints = list(range(model.num_joints))
@@ -185,8 +190,30 @@ class Simulator(EventPlans):
                                            baseOrientation=state.orientation,
                                            useMaximalCoordinates=True)
         self.client.changeDynamics(body, -1, lateralFriction=state.friction)
+        if state.contact is not None:
+            self._set_contact(body, state.contact)
         self.object_body = body
         return body
+
+    def _set_contact(self, body, contact):
+        """
+        Give the object a world's contact parameters (core.sim.worlds.ContactState).
+
+        Why on the object alone: every contact it makes (ground, hand) takes them, as in
+        MuJoCo's object geom and its ground pair, while the hand's own contacts stay Bullet's.
+        Bullet combines two bodies' stiffnesses in series and adds their dampings: the
+        ground's and the hand's defaults (about 1e18 N/m, 0.1 N s/m) leave the object's
+        stiffness and add 0.1 N s/m to its damping. Bullet solves the spring-damper
+        implicitly (an ERP and CFM per contact point), so any stiffness is stable, and each
+        contact point is one such spring: a box resting on four corners is four times as
+        stiff as a sphere on one. Restitution acts above Bullet's restitution velocity
+        threshold (0.2 m/s), on top of the damping.
+        """
+        if contact.stiffness is not None:
+            self.client.changeDynamics(body, -1, contactStiffness=contact.stiffness,
+                                       contactDamping=contact.damping)
+        if contact.restitution is not None:
+            self.client.changeDynamics(body, -1, restitution=contact.restitution)
 
     def object_pose(self):
         """Return the current object's (position, orientation x, y, z, w)."""

@@ -12,25 +12,42 @@ Streams of one seed, as numpy SeedSequence entropy: [seed] the fixed (training) 
 worlds of core.experiments.measures, [seed, RESAMPLE_STREAM, k] the k-th draw. SeedSequence pads
 entropy with zeros, so [seed, s] is [seed, s, 0]: k starts at 1, and RESAMPLE_STREAM is neither 0,
 1 nor 11, so no draw repeats another stream (test_worlds compares the values).
+With `physics.contact` each world also draws its contact parameters (`with_contact`), from its
+set's entropy with CONTACT_STREAM (31) appended ([seed, 31], [seed, 1, 31], [seed, 11, 31],
+[seed, 21, k, 31]): a generator of their own, so the seven quantities above stay as they were.
+The nominal world of stage 1 and the grid's worlds draw none: they meet the engines' own contact.
 `grid_world_states(task, 5)` puts every randomized quantity (a range of non-zero width) at 5
 evenly spaced values, all combinations: the robustness grid of Fig. 3 (Task 4 randomizes six
 quantities: 5^6 = 15,625 worlds). `object_state(task, world)` is the object's initial state
 in a world, which the simulator builds.
 """
 
+import dataclasses
 from dataclasses import dataclass
 import itertools
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 from hand_codesign.core.rotations import axis_angle_quaternion, quaternion_multiply
-from hand_codesign.core.task import resting_height, Task
+from hand_codesign.core.task import CONTACT_PARAMETERS, resting_height, Task
 import numpy as np
 
 HELD_OUT_STREAM = 1  # second entropy word of the held-out worlds' generator
 RESAMPLE_STREAM = 21  # second entropy word of the resampled draws' generators (third: k)
+# appended to a set's entropy for its worlds' contact parameters (physics.contact): their own
+# generator, so the seven quantities of every existing world stay what they were
+CONTACT_STREAM = 31
 
 QUANTITIES = ('position_x', 'position_y', 'position_z', 'orientation', 'friction', 'scale',
               'mass')
+
+
+@dataclass(frozen=True)
+class ContactState:
+    """One world's contact parameters of the object; None: the engine's own."""
+
+    stiffness: Optional[float] = None  # N/m
+    damping: Optional[float] = None  # N s/m
+    restitution: Optional[float] = None
 
 
 @dataclass(frozen=True)
@@ -42,6 +59,8 @@ class WorldState:
     friction_delta: float  # added to the object's friction
     scale: float  # factor on every dimension of the object
     mass_factor: float  # factor on the object's mass
+    # drawn only for a task with physics.contact; None: the engines' own contact
+    contact: Optional[ContactState] = None
 
     @classmethod
     def nominal(cls):
@@ -65,6 +84,7 @@ class ObjectState:
     mass: float  # kg
     friction: float
     size: Tuple[float, ...]  # box: (x, y, z) edges; sphere: (radius,); capsule: (radius, length)
+    contact: Optional[ContactState] = None  # the world's contact parameters (None: engine's)
 
 
 def _ranges(task: Task):
@@ -88,7 +108,39 @@ def world_states(task: Task, count=None) -> List[WorldState]:
     uniform = generator.random((count, len(QUANTITIES)))
     lower = np.array([bounds.lower for bounds in _ranges(task)])
     width = np.array([bounds.width for bounds in _ranges(task)])
-    return [WorldState.from_values(row) for row in lower + uniform * width]
+    worlds = [WorldState.from_values(row) for row in lower + uniform * width]
+    return with_contact(task, worlds, world_stream(task))
+
+
+def with_contact(task: Task, worlds, stream) -> List[WorldState]:
+    """
+    Return the worlds, each with contact parameters drawn in physics.contact's ranges.
+
+    Args:
+        task: the Task; without physics.contact the worlds come back as they are.
+        worlds: the WorldStates of one set, drawn from the entropy `stream`.
+        stream: that set's SeedSequence entropy (an int or a list of ints).
+
+    Returns:
+        list of WorldState. The draws come from the set's entropy with CONTACT_STREAM
+        appended, one row per world (the first k worlds of a larger set keep theirs), a
+        column per parameter of CONTACT_PARAMETERS whether it is given or not, so adding a
+        range leaves the others' draws as they were.
+    """
+    contact = task.physics.contact
+    if contact is None:
+        return list(worlds)
+    entropy = [*np.atleast_1d(stream).tolist(), CONTACT_STREAM]
+    uniform = np.random.default_rng(entropy).random((len(worlds), len(CONTACT_PARAMETERS)))
+    drawn = []
+    for world, row in zip(worlds, uniform):
+        values = {}
+        for column, name in enumerate(CONTACT_PARAMETERS):
+            bounds = getattr(contact, name)
+            if bounds is not None:
+                values[name] = float(bounds.lower + row[column] * bounds.width)
+        drawn.append(dataclasses.replace(world, contact=ContactState(**values)))
+    return drawn
 
 
 def world_stream(task: Task):
@@ -140,4 +192,5 @@ def object_state(task: Task, world: WorldState) -> ObjectState:
         size = (spec.radius * world.scale, spec.length * world.scale)
     return ObjectState(position=tuple(position), orientation=orientation, scale=world.scale,
                        mass=spec.mass * world.mass_factor,
-                       friction=max(0.0, spec.friction + world.friction_delta), size=size)
+                       friction=max(0.0, spec.friction + world.friction_delta), size=size,
+                       contact=world.contact)

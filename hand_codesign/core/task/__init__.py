@@ -24,7 +24,8 @@ dotted key, what was expected and what came.
 # outcomes) besides its own; the schema (schema) declares every key, the table of
 # docs/TASK.md is written from it (document).
 from hand_codesign.core.rotations import axis_angle_quaternion
-from hand_codesign.core.task.parts import (ALGORITHMS, ArchiveSpec, AXES, Bounds, DISTANCES,
+from hand_codesign.core.task.parts import (ALGORITHMS, ArchiveSpec, AXES, Bounds,
+                                           CONTACT_PARAMETERS, ContactSpec, DISTANCES,
                                            EarlyTerminationSpec, GoalSpec, HandSpec, HierarchySpec,
                                            HorizonSpec, MORPHOLOGY_PARAMETERS, MorphologySpec,
                                            ObjectSpec, OrientationGoal, PARAMETER_MODES,
@@ -38,7 +39,8 @@ from hand_codesign.core.task.reader import load_task, parse_design, parse_task
 from hand_codesign.core.task.spec import Task
 
 __all__ = [
-    'ALGORITHMS', 'ArchiveSpec', 'AXES', 'axis_angle_quaternion', 'Bounds', 'DISTANCES',
+    'ALGORITHMS', 'ArchiveSpec', 'AXES', 'axis_angle_quaternion', 'Bounds',
+    'CONTACT_PARAMETERS', 'ContactSpec', 'DISTANCES',
     'EarlyTerminationSpec', 'GoalSpec', 'HandSpec', 'HierarchySpec', 'HorizonSpec', 'load_task',
     'MORPHOLOGY_PARAMETERS', 'MorphologySpec', 'ObjectSpec', 'OrientationGoal', 'PARAMETER_MODES',
     'ParameterSpec', 'parse_design', 'parse_task', 'PhysicsSpec', 'POLICY_KINDS', 'PolicySpec',

@@ -64,6 +64,7 @@ def check_task(task):
     _check_worlds(task, fail)
     _check_archive(task, fail)
     _check_physics(task, fail)
+    _check_contact(task, fail)
 
 
 def _check_physics(task, fail):
@@ -72,6 +73,41 @@ def _check_physics(task, fail):
             physics.engines) or not set(physics.engines) <= set(ENGINES):
         fail('physics.engines', f'distinct engines of {", ".join(ENGINES)} led by physics.engine '
              f'{physics.engine!r}, got {list(physics.engines)!r}')
+
+
+def _check_contact(task, fail):
+    contact = task.physics.contact
+    if contact is None:
+        return
+    if (contact.stiffness is None) != (contact.damping is None):
+        given, missing = (('stiffness', 'damping') if contact.damping is None
+                          else ('damping', 'stiffness'))
+        fail(f'physics.contact.{missing}', f"a range beside {given} (Bullet's changeDynamics "
+             "and MuJoCo's direct solref take stiffness and damping as a pair)")
+    if 'mujoco' in task.physics.engines:
+        _check_mujoco_contact(task, contact, fail)
+
+
+def _check_mujoco_contact(task, contact, fail):
+    # why: MuJoCo's only restitution is its contact's damping ratio (core.sim.mujoco_sim), so
+    # a damping and a restitution would both set it; and its soft contact is stepped
+    # explicitly: it stays stable only as stiff and damped as a time constant of two time
+    # steps allows (MuJoCo's own floor), per kg of the object since MuJoCo's stiffness is an
+    # acceleration per metre. The lightest object is the most demanding.
+    if contact.damping is not None and contact.restitution is not None:
+        fail('physics.contact.restitution', 'no restitution beside damping with mujoco in '
+             "physics.engines (MuJoCo's restitution is its contact's damping: give one)")
+    if contact.stiffness is None:
+        return
+    mass = task.object_spec.mass * task.randomization.mass.lower
+    step = task.time_step
+    for name, most in (('stiffness', mass / (2 * step) ** 2), ('damping', mass / step)):
+        upper = getattr(contact, name).upper
+        if upper > most:
+            unit = 'N/m' if name == 'stiffness' else 'N s/m'
+            fail(f'physics.contact.{name}', f'an upper end of at most {most:.6g} {unit} with '
+                 f'mujoco in physics.engines (the most MuJoCo steps stably at time_step {step} '
+                 f's for the lightest object, {mass:.6g} kg), got {upper:g}')
 
 
 def _check_archive(task, fail):

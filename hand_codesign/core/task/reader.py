@@ -15,8 +15,8 @@ from typing import Union
 
 from hand_codesign.core.task.checks import check_task
 from hand_codesign.core.task.design_reader import DesignReader
-from hand_codesign.core.task.parts import (AXES, ENGINES, GoalSpec, ParameterSpec, PhysicsSpec,
-                                           TaskError)
+from hand_codesign.core.task.parts import (AXES, CONTACT_PARAMETERS, ContactSpec, ENGINES,
+                                           GoalSpec, ParameterSpec, PhysicsSpec, TaskError)
 from hand_codesign.core.task.settings_reader import SettingsReader
 from hand_codesign.core.task.spec import Task
 from hand_codesign.core.task.values import join_key
@@ -208,6 +208,23 @@ class _Reader(SettingsReader, DesignReader):
             self.fail(key, f'a non-empty list of distinct engines of {", ".join(ENGINES)}, '
                       'e.g. [pybullet, mujoco]', value)
         return tuple(value)
+
+    def contact_section(self, spec, value, key):
+        """Return physics.contact: at least one range of CONTACT_PARAMETERS."""
+        contact = ContactSpec(**self.section(ContactSpec, value, key))
+        if not contact.ranges():
+            self.fail(key, f'at least one of {", ".join(CONTACT_PARAMETERS)} (or no contact '
+                      "key: the engines' own contact)", value)
+        return contact
+
+    def contact_range(self, spec, value, key):
+        """Return a range of physics.contact: [lower, upper] within the Key's limits."""
+        bounds = self.bounds(value, key, minimum=spec.minimum)
+        if spec.positive and not bounds.lower > 0:
+            self.fail(key, 'a pair [lower, upper] of positive numbers', value)
+        if spec.interval:
+            self.within(spec, bounds.upper, value, key)
+        return bounds
 
     def axis_ranges(self, spec, value, key):
         """Return the Bounds of an offset along world x, y and z: {x: [l, u], y: ..., z: ...}."""
