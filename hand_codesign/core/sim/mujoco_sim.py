@@ -67,8 +67,11 @@ import mujoco
 import numpy as np
 
 MUJOCO_VERSION = mujoco.__version__
-# m: contacts of the object are detected this far apart (margin) but act only when they
-# penetrate (gap = margin), so core.outcomes can read touches without changing the physics
+# m: contacts of the object are detected this far apart but act only when they penetrate, so
+# core.outcomes can read touches without changing the physics. MuJoCo 4 activates a contact
+# within `margin` and only detects it within `margin + gap` (includemargin = margin): the object
+# has margin 0 and gap TOUCH_MARGIN. (margin = gap = TOUCH_MARGIN, the rule of older MuJoCo,
+# made every hand-object contact act from 1 mm apart and hold the hand 1 mm off the object.)
 TOUCH_MARGIN = CONTACT_DISTANCE
 GROUND_SIZE = 50.0  # m, half extent of the ground plane (only drawn; a plane is infinite)
 CONTACT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
@@ -224,7 +227,7 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
     thing.explicitinertial = True
     thing.add_geom(name='object', type=_GEOM_TYPES[object_shape], size=[0.01, 0.01, 0.01],
                    friction=[1.0, 0, 0], condim=3, priority=OBJECT_PRIORITY, solref=solref,
-                   solimp=CONTACT_SOLIMP, margin=TOUCH_MARGIN, gap=TOUCH_MARGIN)
+                   solimp=CONTACT_SOLIMP, margin=0.0, gap=TOUCH_MARGIN)
     spec.add_pair(name='object_ground', geomname1='object', geomname2='ground', condim=3,
                   friction=[1.0, 1.0, 0.0, 0.0, 0.0], solref=solref, solimp=CONTACT_SOLIMP)
     return spec
@@ -511,8 +514,8 @@ class MujocoSimulator(EventPlans):
         """
         Return the indices of the links with a contact at most `distance` (m) from the object.
 
-        Contacts up to TOUCH_MARGIN apart are detected (the object's margin) but inactive
-        (its gap), so reading them changes nothing in the physics.
+        Contacts up to TOUCH_MARGIN apart are detected (the object's gap) but inactive (its
+        margin is 0), so reading them changes nothing in the physics.
         """
         m, d = self.mj_model, self.mj_data
         mujoco.mj_kinematics(m, d)
