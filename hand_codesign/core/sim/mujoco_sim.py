@@ -73,6 +73,11 @@ MUJOCO_VERSION = mujoco.__version__
 # has margin 0 and gap TOUCH_MARGIN. (margin = gap = TOUCH_MARGIN, the rule of older MuJoCo,
 # made every hand-object contact act from 1 mm apart and hold the hand 1 mm off the object.)
 TOUCH_MARGIN = CONTACT_DISTANCE
+# m or rad: the object-ground contact and the joint limits act from this far off, not only once
+# passed: a box starting on the ground and a joint starting on its limit are held from the first
+# step, as by Bullet's constraints (with margin 0 MuJoCo lets the box fall freely for one step,
+# 0.25 mm, and a joint pushed onto its limit pass it by tens of mrad); they rest this far off
+RESTING_MARGIN = 1e-6
 GROUND_SIZE = 50.0  # m, half extent of the ground plane (only drawn; a plane is infinite)
 CONTACT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
 LIMIT_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
@@ -201,7 +206,7 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
             upper = max(link.upper_limit, link.lower_limit + LOCKED_RANGE)
             joint.update(range=[link.lower_limit, upper],
                          limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                         solref_limit=solref, solimp_limit=LIMIT_SOLIMP)
+                         solref_limit=solref, solimp_limit=LIMIT_SOLIMP, margin=RESTING_MARGIN)
         body.add_joint(**joint)
         if link.cylinder_height > 0:
             body.add_geom(name=link.name, type=mujoco.mjtGeom.mjGEOM_CAPSULE,
@@ -229,7 +234,8 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
                    friction=[1.0, 0, 0], condim=3, priority=OBJECT_PRIORITY, solref=solref,
                    solimp=CONTACT_SOLIMP, margin=0.0, gap=TOUCH_MARGIN)
     spec.add_pair(name='object_ground', geomname1='object', geomname2='ground', condim=3,
-                  friction=[1.0, 1.0, 0.0, 0.0, 0.0], solref=solref, solimp=CONTACT_SOLIMP)
+                  friction=[1.0, 1.0, 0.0, 0.0, 0.0], solref=solref, solimp=CONTACT_SOLIMP,
+                  margin=RESTING_MARGIN)
     return spec
 
 
