@@ -13,6 +13,9 @@ campaign.measures.result_design rebuilds):
   and the vertical), the joint angles and which rest on a limit, and the contacts (which
   bodies touch, their summed normal force); and where the rollouts first diverge.
 - `gif WORLD --out FILE`: the rollout in PyBullet (left) and MuJoCo (right), one GIF.
+- `impacts --errors FILE`: on the worlds of `worlds --save FILE` that succeed in PyBullet only
+  (and on 40 where both succeed), each engine's first finger contact: the box's turn over the
+  next 5 steps, its largest tilt and lift over the next 20, and the medians.
 - `slide`: Task 5's box launched along the ground at --speed m/s, nothing else touching it:
   how high it rises in each engine (MuJoCo's convex contact model lifts a sliding body).
 
@@ -20,6 +23,7 @@ Usage: python bench/diagnose_transfer.py worlds RESULT.json [--preset P] [--unse
        [--pre-com-fix]
        python bench/diagnose_transfer.py trace RESULT.json WORLD [--every 10]
        python bench/diagnose_transfer.py gif RESULT.json WORLD --out FILE.gif
+       python bench/diagnose_transfer.py impacts RESULT.json --errors FILE
        python bench/diagnose_transfer.py slide - [--speed 0.4]
 """
 
@@ -48,6 +52,7 @@ import numpy as np
 
 TURN_LIMIT = 0.1  # rad
 SLIDE_STEPS = 40
+IMPACT_STEPS = 20  # steps after a first finger contact in which its tilt and lift are read
 
 
 @contextlib.contextmanager
@@ -232,6 +237,52 @@ def gif_mode(arguments):
     print(f'wrote {arguments.out} ({count} frames, PyBullet left, MuJoCo right)')
 
 
+def first_hit(rows):
+    """Return the index of the first step with a finger (not the palm) touching the box."""
+    for index, (_, row) in enumerate(rows):
+        if any(key.startswith('L') and not key.startswith('L-') and 'box' in key
+               for key in row['contacts']):
+            return index
+    return None
+
+
+def impact(rows):
+    """Return (step, turn over 5 steps, largest tilt and lift (m) over 20) of a trace's hit."""
+    index = first_hit(rows)
+    if index is None:
+        return None
+    after = [row for _, row in rows[index:index + IMPACT_STEPS]]
+    start = rows[max(index - 1, 0)][1]
+    return (rows[index][0], rows[min(index + 5, len(rows) - 1)][1]['yaw'] - start['yaw'],
+            max(row['tilt'] for row in after),
+            max(row['position'][2] for row in after) - rows[0][1]['position'][2])
+
+
+def impacts_mode(arguments):
+    x, tasks = design_and_tasks(arguments.result, arguments.preset)
+    worlds = unseen_world_states(tasks['pybullet'], arguments.unseen)
+    errors = json.loads(pathlib.Path(arguments.errors).read_text())
+    bullet = np.array(errors['pybullet']) < TURN_LIMIT
+    other = np.array(errors['mujoco']) < TURN_LIMIT
+    groups = {'PyBullet within, MuJoCo not': np.flatnonzero(bullet & ~other),
+              'both within (first 40)': np.flatnonzero(bullet & other)[:40]}
+    for name, indices in groups.items():
+        hits = []
+        for index in indices:
+            found = [impact(trace(engine, tasks[engine], x, worlds[index])[0])
+                     for engine in ('pybullet', 'mujoco')]
+            if None not in found:
+                hits.append(found[0][1:] + found[1][1:])
+        values = np.array(hits)
+        same = int(np.sum(np.sign(values[:, 0]) == np.sign(values[:, 3])))
+        print(f'{name}: {len(values)} worlds; turn over the 5 steps after the first finger '
+              f'contact, median PyBullet {np.median(values[:, 0]):+.3f}, MuJoCo '
+              f'{np.median(values[:, 3]):+.3f} rad (same direction in {same}, MuJoCo more '
+              f'positive in {int(np.sum(values[:, 3] > values[:, 0]))}); largest tilt '
+              f'{np.median(values[:, 1]):.3f} / {np.median(values[:, 4]):.3f} rad; largest lift '
+              f'{np.median(values[:, 2]) * 1000:.2f} / {np.median(values[:, 5]) * 1000:.2f} mm')
+
+
 def slide_mode(arguments):
     task = load_task(pathlib.Path(__file__).resolve().parents[1] / 'config' / 'tasks'
                      / 'task5.yaml')
@@ -274,7 +325,7 @@ def slide_mode(arguments):
 def main():
     """Run one mode."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
-    parser.add_argument('mode', choices=('worlds', 'trace', 'gif', 'slide'))
+    parser.add_argument('mode', choices=('worlds', 'trace', 'gif', 'impacts', 'slide'))
     parser.add_argument('result')
     parser.add_argument('world', type=int, nargs='?', default=0)
     parser.add_argument('--preset', default='task6_palm_beside.yaml')
@@ -285,8 +336,9 @@ def main():
     parser.add_argument('--every', type=int, default=10)
     parser.add_argument('--out', default='diagnose.gif')
     parser.add_argument('--speed', type=float, default=0.4)
+    parser.add_argument('--errors', default='')
     arguments = parser.parse_args()
-    {'worlds': worlds_mode, 'trace': trace_mode, 'gif': gif_mode,
+    {'worlds': worlds_mode, 'trace': trace_mode, 'gif': gif_mode, 'impacts': impacts_mode,
      'slide': slide_mode}[arguments.mode](arguments)
 
 

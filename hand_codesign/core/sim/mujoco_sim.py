@@ -36,6 +36,12 @@ Settings chosen to match Bullet on this model (one place; measured in test_mujoc
   sink by millimetres and a joint pass its limit by tens of mrad, while Bullet's constraints
   are hard. CONTACT_SOLREF / LIMIT_SOLREF use the stiffest time constant MuJoCo accepts
   (twice the time step) with critical damping, and SOLIMP an impedance near 1.
+- Margins (MuJoCo 4: a contact or limit acts within `margin`, is only detected within
+  `margin + gap`): the object's contacts with the hand are read within TOUCH_MARGIN and act
+  only when they touch; the object-ground contact and the joint limits act from RESTING_MARGIN
+  off, so that a box on the ground and a joint on its limit are held from the first step.
+  Left different, MuJoCo's own: its convex contacts lift a sliding box (0.85 mm at 0.4 m/s,
+  none in Bullet; docs/results/engines/README.md).
 - Gravity compensation (a torque policy's or eq. (1)'s N(theta)): `gravcomp` 1 on every
   segment, which MuJoCo applies as the passive joint forces that cancel gravity, exactly
   N(theta), without Python in the step loop.
