@@ -7,12 +7,17 @@ the per-world measures kept as JSON values (floats exact), so that tables and ba
 recomputed from them without simulating again.
 """
 
+import ast
+
 from hand_codesign.analysis import records
+from hand_codesign.campaign.experiment import pinned_dir
 from hand_codesign.core.experiments.measures import measure_worlds
 from hand_codesign.core.experiments.measures import summarize
 from hand_codesign.core.experiments.measures import unseen_world_states
 from hand_codesign.core.experiments.measures import with_pose_error
 from hand_codesign.core.experiments.measures import WorldMeasures
+from hand_codesign.core.run.runs import run_task
+from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.core.task.variant import Variant
 import numpy as np
 
@@ -60,6 +65,23 @@ def world_measures_of(values):
         np.asarray(values['collisions'], dtype=bool),
         np.asarray(values['limit_contacts'], dtype=bool),
         np.asarray(values['limit_reached'], dtype=bool))
+
+
+def result_design(result, preset, engine):
+    """
+    Return (task, normalized genome) of a run's committed result record, without its bag.
+
+    result: the parsed `result-RUN.json` of a campaign (its 'design' maps gene names to
+    values, as a dict or its repr; 'seed' and 'structure' are the run's); preset: the pinned
+    preset's file name in config/reproduce/ the run used; engine: 'pybullet' or 'mujoco'.
+    """
+    design = result['design']
+    if isinstance(design, str):  # written as the dict's repr
+        design = ast.literal_eval(design)
+    task = run_task((pinned_dir() / preset).read_text(), f'config/reproduce/{preset}',
+                    int(result['seed']), 0, 0, 0, Variant(structure=tuple(result['structure'])),
+                    engine=engine)
+    return task, genome_spec(task).encode(design)
 
 
 def measure_bag(bag, tolerance, unseen_worlds, processes=1):

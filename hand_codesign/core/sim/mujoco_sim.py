@@ -36,6 +36,12 @@ Settings chosen to match Bullet on this model (one place; measured in test_mujoc
   sink by millimetres and a joint pass its limit by tens of mrad, while Bullet's constraints
   are hard. CONTACT_SOLREF / LIMIT_SOLREF use the stiffest time constant MuJoCo accepts
   (twice the time step) with critical damping, and SOLIMP an impedance near 1.
+- Margins (MuJoCo 4: a contact or limit acts within `margin`, is only detected within
+  `margin + gap`): the object's contacts with the hand are read within TOUCH_MARGIN and act
+  only when they touch; the object-ground contact and the joint limits act from RESTING_MARGIN
+  off, so that a box on the ground and a joint on its limit are held from the first step.
+  Left different, MuJoCo's own: its convex contacts lift a sliding box (0.85 mm at 0.4 m/s,
+  none in Bullet; docs/results/engines/README.md).
 - Gravity compensation (a torque policy's or eq. (1)'s N(theta)): `gravcomp` 1 on every
   segment, which MuJoCo applies as the passive joint forces that cancel gravity, exactly
   N(theta), without Python in the step loop.
@@ -67,9 +73,17 @@ import mujoco
 import numpy as np
 
 MUJOCO_VERSION = mujoco.__version__
-# m: contacts of the object are detected this far apart (margin) but act only when they
-# penetrate (gap = margin), so core.outcomes can read touches without changing the physics
+# m: contacts of the object are detected this far apart but act only when they penetrate, so
+# core.outcomes can read touches without changing the physics. MuJoCo 4 activates a contact
+# within `margin` and only detects it within `margin + gap` (includemargin = margin): the object
+# has margin 0 and gap TOUCH_MARGIN. (margin = gap = TOUCH_MARGIN, the rule of older MuJoCo,
+# made every hand-object contact act from 1 mm apart and hold the hand 1 mm off the object.)
 TOUCH_MARGIN = CONTACT_DISTANCE
+# m or rad: the object-ground contact and the joint limits act from this far off, not only once
+# passed: a box starting on the ground and a joint starting on its limit are held from the first
+# step, as by Bullet's constraints (with margin 0 MuJoCo lets the box fall freely for one step,
+# 0.25 mm, and a joint pushed onto its limit pass it by tens of mrad); they rest this far off
+RESTING_MARGIN = 1e-6
 GROUND_SIZE = 50.0  # m, half extent of the ground plane (only drawn; a plane is infinite)
 CONTACT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
 LIMIT_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
@@ -252,7 +266,7 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
             upper = max(link.upper_limit, link.lower_limit + LOCKED_RANGE)
             joint.update(range=[link.lower_limit, upper],
                          limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                         solref_limit=solref, solimp_limit=LIMIT_SOLIMP)
+                         solref_limit=solref, solimp_limit=LIMIT_SOLIMP, margin=RESTING_MARGIN)
         body.add_joint(**joint)
         if link.cylinder_height > 0:
             body.add_geom(name=link.name, type=mujoco.mjtGeom.mjGEOM_CAPSULE,
@@ -278,9 +292,10 @@ def hand_spec(model: HandModel, time_step, base_position=(0.0, 0.0, 0.0),
     thing.explicitinertial = True
     thing.add_geom(name='object', type=_GEOM_TYPES[object_shape], size=[0.01, 0.01, 0.01],
                    friction=[1.0, 0, 0], condim=3, priority=OBJECT_PRIORITY, solref=solref,
-                   solimp=CONTACT_SOLIMP, margin=TOUCH_MARGIN, gap=TOUCH_MARGIN)
+                   solimp=CONTACT_SOLIMP, margin=0.0, gap=TOUCH_MARGIN)
     spec.add_pair(name='object_ground', geomname1='object', geomname2='ground', condim=3,
-                  friction=[1.0, 1.0, 0.0, 0.0, 0.0], solref=solref, solimp=CONTACT_SOLIMP)
+                  friction=[1.0, 1.0, 0.0, 0.0, 0.0], solref=solref, solimp=CONTACT_SOLIMP,
+                  margin=RESTING_MARGIN)
     return spec
 
 
@@ -581,8 +596,8 @@ class MujocoSimulator(EventPlans):
         """
         Return the indices of the links with a contact at most `distance` (m) from the object.
 
-        Contacts up to TOUCH_MARGIN apart are detected (the object's margin) but inactive
-        (its gap), so reading them changes nothing in the physics.
+        Contacts up to TOUCH_MARGIN apart are detected (the object's gap) but inactive (its
+        margin is 0), so reading them changes nothing in the physics.
         """
         m, d = self.mj_model, self.mj_data
         mujoco.mj_kinematics(m, d)

@@ -251,3 +251,49 @@ def test_the_object_s_centre_of_mass_and_inertia_axes_are_its_shape_s(preset):
         np.testing.assert_allclose(d.xipos[body], d.geom_xpos[geom], atol=1e-12)
         np.testing.assert_allclose(d.xipos[body], state.position, atol=1e-12)
         np.testing.assert_allclose(d.ximat[body], d.geom_xmat[geom], atol=1e-12)
+
+
+def test_a_hand_object_contact_is_read_within_a_millimetre_but_acts_only_when_touching(task):
+    # MuJoCo 4 activates a contact within its margin and only detects it within margin + gap:
+    # the object's margin is 0, so a finger 0.5 mm off the box is a touch that exerts nothing
+    task = on_mujoco(task)
+    design = fingers_design(task)
+    model = hand_model(design.hand, task.hand)
+    state = object_state(task, WorldState.nominal())
+    with MujocoSimulator() as simulator:
+        simulator.build(task, model)
+        simulator.reset(state, 'box')
+        m, d = simulator.mj_model, simulator.mj_data
+        finger = m.geom(model.links[1].name).id  # the first finger's tip segment
+        start = simulator._object_qpos
+        apart = np.zeros(6)
+        mujoco.mj_forward(m, d)
+        distance = mujoco.mj_geomDistance(m, d, simulator._object_geom, finger, 1.0, apart)
+        towards = (apart[3:] - apart[:3]) / distance  # from the box to the finger
+        simulator.object_body = simulator._object_body
+        for gap, acts in ((0.0005, False), (-0.0005, True)):
+            d.qpos[start:start + 3] += towards * (distance - gap)
+            mujoco.mj_forward(m, d)
+            contacts = [contact for contact in d.contact[:d.ncon] if finger in contact.geom]
+            assert len(contacts) >= 1 and all(
+                abs(contact.dist - gap) < 1e-6 for contact in contacts), gap
+            assert all((contact.efc_address >= 0) == acts for contact in contacts), gap
+            assert 1 in simulator.touching_links(0.001)
+            distance = gap
+
+
+def test_a_box_on_the_ground_and_joints_on_their_limits_are_held_from_the_first_step(task):
+    # MuJoCo's constraints act only within their margin: with margin 0, a box starting on the
+    # ground fell freely for one step (0.25 mm) and a joint pushed onto the limit it starts on
+    # passed it by tens of mrad before being pushed back; Bullet holds both from the start
+    design = fingers_design(task, angle=0.3, limit=0.3, torques=[0.01, 0.005, -0.01, -0.005])
+    for engine in ENGINES:
+        _, angles = nominal_rollout(engine, task, design)
+        assert np.abs(angles).max() < 0.3 + 1e-3, engine.engine
+    model = hand_model(design.hand, task.hand)
+    state = object_state(task, WorldState.nominal())
+    with MujocoSimulator() as simulator:
+        simulator.build(on_mujoco(task), model)
+        simulator.reset(state, 'box')
+        mujoco.mj_step(simulator.mj_model, simulator.mj_data)
+        assert abs(simulator.object_pose()[0][2] - state.position[2]) < 1e-5
