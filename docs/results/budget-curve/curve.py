@@ -5,7 +5,9 @@ Each BAG is a run continued from the one before (`hand-codesign run --resume BAG
 --iterations N`), so its design is the design a run of N generations ends with. Each is
 measured on --unseen worlds (the run seed's unseen stream, as `reproduce` measures) under the
 experiment's tolerance, with the project's measures (hand_codesign.campaign.measures), and the
-per-world measures are cached beside the table as BAGNAME.json (a rerun reads them back).
+per-world measures are cached beside the table as OUT-BAGNAME.json (a rerun reads them back).
+A raced run (`worlds: {racing: ...}`) is a row with the rollouts its race ran, beside the
+curve of the unraced runs.
 
 Usage (from the repository's root):
     .venv/bin/python docs/results/budget-curve/curve.py --tolerance plane --limit 0.005 \
@@ -35,12 +37,14 @@ def rollouts_run(record):
 
 
 def wall_minutes(bags):
-    """Return the wall time of the run up to each bag, in minutes (its parts summed)."""
-    total, times = 0.0, []
+    """Return each run's wall time in minutes, with the runs it continued (resumed) added."""
+    by_run, times = {}, []
     for bag in bags:
-        summary = records.last_summary(records.open_run(bag, warn=False))
-        total += float(summary['wall_time']) / 60
-        times.append(total)
+        record = records.open_run(bag, warn=False)
+        summary = records.last_summary(record)
+        before = by_run.get(record.run_info.resumed_from, 0.0)
+        by_run[record.run_id] = before + float(summary['wall_time']) / 60
+        times.append(by_run[record.run_id])
     return times
 
 
@@ -66,8 +70,8 @@ def main():
     out = pathlib.Path(arguments.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tolerance = Tolerance(arguments.tolerance, arguments.limit)
-    lines = ['| generations | rollouts run | of Table I | within | median | p90 | wall (min) |',
-             '|---|---|---|---|---|---|---|']
+    lines = ['| run | generations | rollouts run | of Table I | within | median (m, rad) | p90 | '
+             'wall (min) |', '|---|---|---|---|---|---|---|---|']
     points = []
     for bag, minutes in zip(arguments.bags, wall_minutes(arguments.bags)):
         record = records.open_run(bag, warn=False)
@@ -76,10 +80,11 @@ def main():
         whole = arguments.table_i * info.population * info.world_states
         cache = out.parent / f'{out.name}-{pathlib.Path(bag).name}.json'
         summary = measured(bag, tolerance, arguments.unseen, cache)['summary']
-        lines.append(f"| {info.iterations} | {rollouts:,} | {rollouts / whole:.2f} | "
+        lines.append(f"| {pathlib.Path(bag).name} | {info.iterations} | {rollouts:,} | {rollouts / whole:.2f} | "
                      f"{summary['within']:.1%} | {summary['median']:.4g} | "
                      f"{summary['p90']:.4g} | {minutes:.1f} |")
-        points.append((rollouts / whole, summary['within']))
+        if not records.told_worlds(record):   # the curve: unraced runs
+            points.append((rollouts / whole, summary['within']))
     out.with_suffix('.md').write_text('\n'.join(lines) + '\n')
     pyplot = load_pyplot()
     figure, axes = pyplot.subplots(figsize=(5, 3.2))
