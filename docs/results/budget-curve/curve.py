@@ -24,6 +24,8 @@ import pathlib
 from hand_codesign.analysis import records
 from hand_codesign.analysis.figures import load_pyplot
 from hand_codesign.campaign.measures import measure_bag
+from hand_codesign.campaign.measures import world_measures_of
+from hand_codesign.core.experiments.measures import summarize
 from hand_codesign.core.experiments.measures import Tolerance
 
 
@@ -64,14 +66,19 @@ def main():
     parser.add_argument('--tolerance', required=True, help='error kind: plane, orientation, pose')
     parser.add_argument('--limit', type=float, required=True, help='m or rad (pose: 1)')
     parser.add_argument('--table-i', type=int, required=True, help="Table I's generations")
+    parser.add_argument('--also', nargs='*', default=[], metavar='KIND:LIMIT',
+                        help='further shares within, e.g. orientation:0.1 plane:0.005')
     parser.add_argument('--unseen', type=int, default=1000)
     parser.add_argument('--out', required=True, help='table and figure path, without suffix')
     arguments = parser.parse_args()
     out = pathlib.Path(arguments.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tolerance = Tolerance(arguments.tolerance, arguments.limit)
+    also = [Tolerance(kind, float(limit)) for kind, limit in
+            (text.split(':') for text in arguments.also)]
     lines = ['| run | generations | rollouts run | of Table I | within | median (m, rad) | p90 | '
-             'wall (min) |', '|---|---|---|---|---|---|---|---|']
+             + ''.join(f'{other.describe()} | ' for other in also) + 'wall (min) |',
+             '|---|---|---|---|---|---|---|' + '---|' * len(also) + '---|']
     points = []
     for bag, minutes in zip(arguments.bags, wall_minutes(arguments.bags)):
         record = records.open_run(bag, warn=False)
@@ -79,10 +86,12 @@ def main():
         rollouts = rollouts_run(record)
         whole = arguments.table_i * info.population * info.world_states
         cache = out.parent / f'{out.name}-{pathlib.Path(bag).name}.json'
-        summary = measured(bag, tolerance, arguments.unseen, cache)['summary']
-        lines.append(f"| {pathlib.Path(bag).name} | {info.iterations} | {rollouts:,} | {rollouts / whole:.2f} | "
-                     f"{summary['within']:.1%} | {summary['median']:.4g} | "
-                     f"{summary['p90']:.4g} | {minutes:.1f} |")
+        values = measured(bag, tolerance, arguments.unseen, cache)
+        summary, worlds = values['summary'], world_measures_of(values['worlds'])
+        shares = ''.join(f'{summarize(worlds, other).within:.1%} | ' for other in also)
+        lines.append(f'| {pathlib.Path(bag).name} | {info.iterations} | {rollouts:,} | '
+                     f"{rollouts / whole:.2f} | {summary['within']:.1%} | "
+                     f"{summary['median']:.4g} | {summary['p90']:.4g} | {shares}{minutes:.1f} |")
         if not records.told_worlds(record):   # the curve: unraced runs
             points.append((rollouts / whole, summary['within']))
     out.with_suffix('.md').write_text('\n'.join(lines) + '\n')
