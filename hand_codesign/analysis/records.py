@@ -480,6 +480,18 @@ def told_worlds(record):
     return met
 
 
+def raced_rollouts(met):
+    """
+    Return (rollouts run, rollouts a full run would have run, candidates stopped early).
+
+    met: told_worlds(record), {candidate id: (worlds met, the batch's worlds)}.
+    """
+    ran = sum(count for count, _ in met.values())
+    whole = sum(most for _, most in met.values())
+    stopped = sum(1 for count, most in met.values() if count < most)
+    return ran, whole, stopped
+
+
 def with_worlds(recorded, worlds):
     """Return recorded with a RacedAnswer for each candidate a race stopped early."""
     raced = dict(recorded)

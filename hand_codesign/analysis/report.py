@@ -510,8 +510,6 @@ def racing_facts(record):
     met = records.told_worlds(record)
     if not met:
         return []
-    ran = sum(count for count, _ in met.values())
-    whole = sum(most for _, most in met.values())
-    stopped = sum(1 for count, most in met.values() if count < most)
+    ran, whole, stopped = records.raced_rollouts(met)
     return [('racing', f'{ran} of {whole} rollouts run ({stopped} of {len(met)} candidates '
                        f'stopped early: {1 - ran / whole:.1%} of the rollouts saved)')]

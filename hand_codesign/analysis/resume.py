@@ -17,14 +17,25 @@ Every replayed genome is checked against the recorded Candidate messages.
 
 The optimizer node continues from `point.search` as from a fresh one; candidate ids continue
 where the interrupted run stopped, and the final result equals an uninterrupted run's.
+
+A resumed run's bag holds only what that run evaluated, from where the run it continued
+stopped (RunInfo.resumed_from). Resuming such a bag (a run interrupted again, or continued once
+more) reads the earlier runs' bags too, found beside it in the same folder; without them the
+run is refused, never started over.
 """
+
+import pathlib
 
 from hand_codesign.analysis import records
 from hand_codesign.analysis.records import recorded_evaluations
 from hand_codesign.analysis.records import told_objectives
+from hand_codesign.bag.reader import BagError
+from hand_codesign.bag.reader import read_topics
+from hand_codesign.core.contract import RUN_INFO_TYPE
 from hand_codesign.core.search.resume import extended_task
 from hand_codesign.core.search.resume import rebuild_search
 from hand_codesign.core.search.resume import ResumePoint
+from hand_codesign.errors import UserError
 import numpy as np
 
 
@@ -54,9 +65,61 @@ def resume_point(bag_or_record, iterations=0):
     task = records.run_task_of(record)
     if iterations:
         task = extended_task(task, iterations, record.path)
-    return rebuild_search(task, record.run_id, record.path, recorded_evaluations(record),
-                          recorded_genomes(record), record)
+    recorded, genomes = {}, {}
+    for part in runs_continued(record) + [record]:   # the earliest first, this run's last
+        recorded.update(recorded_evaluations(part))
+        genomes.update(recorded_genomes(part))
+    return rebuild_search(task, record.run_id, record.path, recorded, genomes, record)
 
 
-__all__ = ['recorded_evaluations', 'recorded_genomes', 'resume_point', 'ResumePoint',
-           'told_objectives']
+def runs_continued(record):
+    """
+    Return the RunRecords of the runs record's run continued, the earliest first.
+
+    A fresh run's first candidate is number 0 and candidate ids go on across resumes, so a bag
+    without candidate 0 whose RunInfo names resumed_from starts where that run stopped; its
+    bag is looked for beside record's (UserError when it is not there).
+    """
+    chain = []
+    while (record.run_info is not None and record.run_info.resumed_from
+           and not holds_first_candidate(record)):
+        record = bag_of_run(record.run_info.resumed_from, record.path)
+        chain.insert(0, record)
+    return chain
+
+
+def holds_first_candidate(record):
+    """Return whether the bag holds candidate 0, which only a run's first generation asks."""
+    candidates = record.candidates
+    return bool(len(candidates)) and 0 in set(np.asarray(candidates['candidate_id']).tolist())
+
+
+def bag_of_run(run_id, beside):
+    """Return the RunRecord of run run_id from a bag in the folder of bag `beside`; UserError."""
+    beside = pathlib.Path(beside).resolve()
+    folder = beside.parent
+    for entry in sorted(folder.iterdir()):
+        if entry != beside and run_id in run_ids_of(entry):
+            return records.open_run(entry, warn=False)
+    raise UserError(f'{beside}: run {run_id}, which this run continued, holds its first '
+                    f'generations, and no bag in {folder} holds it: put that bag beside this '
+                    'one to resume')
+
+
+def run_ids_of(path):
+    """Return the run ids a bag's RunInfo messages announce (empty for anything else)."""
+    named = records.result_run_id(path)
+    if named:
+        return {named}
+    if not (path.suffix == '.mcap' or (path / 'metadata.yaml').is_file()):
+        return set()
+    try:
+        tables, _ = read_topics(path, [RUN_INFO_TYPE])
+    except BagError:
+        return set()
+    table = tables[RUN_INFO_TYPE]
+    return set(table['run_id']) if len(table) else set()
+
+
+__all__ = ['bag_of_run', 'recorded_evaluations', 'recorded_genomes', 'resume_point',
+           'ResumePoint', 'runs_continued', 'told_objectives']

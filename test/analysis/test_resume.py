@@ -2,6 +2,7 @@
 
 import dataclasses
 import json
+import shutil
 
 from analysis_run import BUDGET
 from analysis_run import copy_bag
@@ -143,6 +144,30 @@ def test_a_finished_run_continues_as_a_run_of_the_larger_budget(real_run, tmp_pa
     assert record.run_info.iterations == 6
     assert record.run_info.resumed_from == read_run(real_run.bag).run_info.run_id
     assert sorted(set(np.asarray(record.candidates['generation']).tolist())) == [4, 5]
+
+
+@pytest.mark.system
+def test_a_continued_run_continues_again_with_the_bag_it_continued_beside_it(real_run, tmp_path):
+    # a continued run's bag starts where the run it continued stopped (generation 4); resumed
+    # again, the search is rebuilt from both bags, and without the first one the run is
+    # refused in one line naming it, instead of starting over from generation 0
+    shutil.copytree(real_run.bag, tmp_path / 'first')
+    continued = tmp_path / 'continued'
+    finished = run_cli('run', '--resume', tmp_path / 'first', '--iterations', '6',
+                       '--evaluators', '2', '--bag', continued, '--domain-id', 'auto')
+    assert finished.returncode == 0, finished.stdout + finished.stderr
+    point = resume_point(continued, iterations=8)
+    assert point.batches_told == 6 and point.evaluations_told == 36
+    alone = tmp_path / 'alone'
+    shutil.copytree(continued, alone / 'continued')
+    first_run = read_run(real_run.bag).run_info.run_id
+    with pytest.raises(UserError, match=f'run {first_run}, which this run continued'):
+        resume_point(alone / 'continued', iterations=8)
+    unused = tmp_path / 'unused'
+    printed = run_cli('run', '--resume', alone / 'continued', '--iterations', '8', '--bag',
+                      unused)
+    assert printed.returncode != 0 and not unused.exists()
+    assert first_run in printed.stderr and 'Traceback' not in printed.stderr
 
 
 @pytest.mark.system

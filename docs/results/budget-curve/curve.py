@@ -34,7 +34,7 @@ def rollouts_run(record):
     info = record.run_info
     met = records.told_worlds(record)
     if met:
-        return sum(count for count, _ in met.values())
+        return records.raced_rollouts(met)[0]
     return info.iterations * info.population * info.world_states
 
 
