@@ -5,7 +5,7 @@ The name-to-class registry sits here, above the classes it names (core.search.op
 core.search.restarts, core.search.quality_diversity), so that none of them needs this module.
 """
 
-from typing import Optional
+from typing import Any, Dict, Optional
 
 from hand_codesign.core.search.optimizers import AskTellOptimizer, CmaEs, MoCmaEs, OptimizerError
 from hand_codesign.core.search.quality_diversity import ALGORITHMS as QD_ALGORITHMS
@@ -52,13 +52,15 @@ def make_optimizer(task: Task, dim: int, first_id: int = 0, seed_x: Optional[Arr
     design = task.seed_design
     if seed_x is None and design is not None and design.hand.structure == tuple(task.structure):
         seed_x = seed_genome(task)
-    extra = {}
+    extra: Dict[str, Any] = {}
     if task.algorithm in RESTART_ALGORITHMS:
         extra = {'stagnation': task.restart_stagnation}
     elif task.algorithm in QD_ALGORITHMS:
         extra = _archive_options(task)
     elif task.algorithm == 'cma' and task.worlds.racing is not None:
         extra = {'raced': True}  # core.search.racing
+    elif task.algorithm == 'mocma':
+        extra = {'front_choice': task.front_choice}
     return classes[task.algorithm](
         dim, task.objective_weights, task.population, task.iterations,
         task.seed if seed is None else seed,

@@ -505,20 +505,22 @@ class MoCmaEs(AskTellOptimizer):
     algorithm = 'mocma'
 
     def __init__(self, dim, weights, population, iterations, seed, first_id=0, x0=None,
-                 sigma0=SIGMA0):
+                 sigma0=SIGMA0, front_choice='normalized'):
         super().__init__(dim, weights, population, iterations, seed, first_id, x0, sigma0)
         self._strategy = None
+        self.front_choice = front_choice
 
     @property
     def result(self):
-        """Return the design of the Pareto front closest to zero after min-max normalization."""
+        """Return the design of the Pareto front that front_choice picks (front_index)."""
         if self._strategy is None:
             return None
         front = self._pareto_front()
         ids = tuple(ind.candidate_id for ind in front)
         xs = np.array([ind.x for ind in front])
         objectives = np.array([ind.fitness.values for ind in front], dtype=float)
-        best = closest_to_zero(objectives)
+        # getattr: a state saved before front_choice existed picks as it did then
+        best = front_index(objectives, self.weights, getattr(self, 'front_choice', 'normalized'))
         return OptimizerResult(
             ids[best], front[best].generation, front[best].x, objectives[best].copy(),
             self.fitness_of(objectives[best]), self._evaluations, self._generation,
@@ -576,6 +578,20 @@ def closest_to_zero(objectives):
     normalized = np.divide(objectives - low, span, out=np.zeros_like(objectives),
                            where=span > 0)
     return int(np.argmin(np.linalg.norm(normalized, axis=1)))
+
+
+def front_index(objectives, weights, choice='normalized'):
+    """
+    Return the row of a Pareto front (rows: designs, columns: minimized objectives) to report.
+
+    'normalized' is the paper's rule (closest_to_zero, III.C); 'weighted' the row with the
+    least weighted sum (weights: one per column, the task's), ties to the first row. The
+    normalized rule depends on the front's extremes: a front that reaches far along one
+    objective stretches that column, and its chosen point moves towards the other.
+    """
+    if choice == 'weighted':
+        return int(np.argmin(np.asarray(objectives, dtype=float) @ np.asarray(weights)))
+    return closest_to_zero(objectives)
 
 
 def replay(optimizer, recorded, recorded_x=None):
@@ -644,6 +660,6 @@ def _same_np_state(first, second):
 
 __all__ = [
     'AskTellOptimizer', 'Candidate', 'CmaEs', 'MoCmaEs', 'OptimizerError', 'OptimizerResult',
-    'ReplayError', 'SIGMA0', 'TellError', 'closest_to_zero', 'derived_seed',
+    'ReplayError', 'SIGMA0', 'TellError', 'closest_to_zero', 'derived_seed', 'front_index',
     'least_hypervolume_contributor', 'library_seed', 'non_dominated', 'replay',
 ]

@@ -37,6 +37,9 @@ def check_task(task):
     if task.restart_stagnation is not None and task.algorithm not in RESTART_ALGORITHMS:
         fail('optimizer.restart_stagnation', f'no restart_stagnation for {task.algorithm} (it '
              f'is for {" and ".join(RESTART_ALGORITHMS)}, which restart CMA-ES)')
+    if task.front_choice != 'normalized' and task.algorithm != 'mocma':
+        fail('optimizer.front_choice', f'no front_choice for {task.algorithm} (it chooses a '
+             'design of the Pareto front of mocma)')
     steps = task.duration / task.time_step
     if abs(steps - round(steps)) > 1e-6 or round(steps) < 1:
         fail('duration', f'a whole number of time steps ({task.time_step} s), got '

@@ -22,6 +22,8 @@ STARTS = ('plane', 'midair')
 DISTANCES = ('euclidean', 'manhattan')
 ALGORITHMS = ('cma', 'mocma', 'ipop-cma', 'bipop-cma', 'cma-mae', 'cma-me')
 RESTART_ALGORITHMS = ('ipop-cma', 'bipop-cma')  # CMA-ES with restarts (core.search.restarts)
+# which design of MO-CMA-ES's final Pareto front a run returns (core.search.optimizers.front_index)
+FRONT_CHOICES = ('normalized', 'weighted')
 QD_ALGORITHMS = ('cma-mae', 'cma-me')  # quality-diversity search (core.search.quality_diversity)
 # the descriptors of a design an archive may span (core.task.descriptors)
 DESCRIPTOR_NAMES = ('finger_length', 'length_asymmetry', 'joint_range', 'initial_angle',

@@ -12,8 +12,8 @@ from typing import Optional, Tuple
 from hand_codesign.core.design import Design
 from hand_codesign.core.task.checks import check_task
 from hand_codesign.core.task.parts import (ALGORITHMS, ArchiveSpec, EarlyTerminationSpec,
-                                           GoalSpec, HandSpec, HierarchySpec, MorphologySpec,
-                                           ObjectSpec, PhysicsSpec, PolicySpec,
+                                           FRONT_CHOICES, GoalSpec, HandSpec, HierarchySpec,
+                                           MorphologySpec, ObjectSpec, PhysicsSpec, PolicySpec,
                                            RandomizationSpec, TaskError, TorquePenaltySpec,
                                            WeightsSpec, WorldsSpec)
 from hand_codesign.core.task.schema import GIVEN, key
@@ -67,6 +67,13 @@ class Task:
         'ipop-cma, bipop-cma: generations without improvement that end a CMA-ES instance',
         'integer', default=None, default_text="pycma's window",
         yaml='optimizer.restart_stagnation')
+    # not in the paper beyond 'normalized' (III.C); the search is the same either way, only the
+    # design it returns differs
+    front_choice: str = key(
+        "mocma: the design of the final Pareto front the run returns: 'normalized', the one "
+        'closest to zero with each objective min-max normalized over the front (III.C), or '
+        "'weighted', the one with the least weighted sum of the task's weights", 'choice',
+        choices=FRONT_CHOICES, default='normalized', yaml='optimizer.front_choice')
     # the archive of cma-mae / cma-me (core.search.quality_diversity); None: ArchiveSpec's defaults
     archive: Optional[ArchiveSpec] = key(
         'cma-mae, cma-me: the archive of designs, a grid over two descriptors', 'section',
