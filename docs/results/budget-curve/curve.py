@@ -23,6 +23,7 @@ import pathlib
 
 from hand_codesign.analysis import records
 from hand_codesign.analysis.figures import load_pyplot
+from hand_codesign.analysis.resume import runs_continued
 from hand_codesign.campaign.measures import measure_bag
 from hand_codesign.campaign.measures import world_measures_of
 from hand_codesign.core.experiments.measures import summarize
@@ -39,14 +40,17 @@ def rollouts_run(record):
 
 
 def wall_minutes(bags):
-    """Return each run's wall time in minutes, with the runs it continued (resumed) added."""
-    by_run, times = {}, []
+    """
+    Return each run's wall time in minutes, with that of the runs it continued added.
+
+    A run counts the runs it continued only where its bag starts after their generations
+    (analysis.resume.runs_continued): a resume that started over ran them again itself.
+    """
+    times = []
     for bag in bags:
         record = records.open_run(bag, warn=False)
-        summary = records.last_summary(record)
-        before = by_run.get(record.run_info.resumed_from, 0.0)
-        by_run[record.run_id] = before + float(summary['wall_time']) / 60
-        times.append(by_run[record.run_id])
+        chain = runs_continued(record) + [record]
+        times.append(sum(float(records.last_summary(part)['wall_time']) for part in chain) / 60)
     return times
 
 
