@@ -65,11 +65,22 @@ def resume_point(bag_or_record, iterations=0):
     task = records.run_task_of(record)
     if iterations:
         task = extended_task(task, iterations, record.path)
+    recorded, genomes = recorded_run(record)
+    return rebuild_search(task, record.run_id, record.path, recorded, genomes, record)
+
+
+def recorded_run(record):
+    """
+    Return (recorded evaluations, recorded genomes) of the run from its first generation.
+
+    The bag's own, and those of the runs it continued (runs_continued), as
+    recorded_evaluations and recorded_genomes give them.
+    """
     recorded, genomes = {}, {}
     for part in runs_continued(record) + [record]:   # the earliest first, this run's last
         recorded.update(recorded_evaluations(part))
         genomes.update(recorded_genomes(part))
-    return rebuild_search(task, record.run_id, record.path, recorded, genomes, record)
+    return recorded, genomes
 
 
 def runs_continued(record):
@@ -121,5 +132,5 @@ def run_ids_of(path):
     return set(table['run_id']) if len(table) else set()
 
 
-__all__ = ['bag_of_run', 'recorded_evaluations', 'recorded_genomes', 'resume_point',
-           'ResumePoint', 'runs_continued', 'told_objectives']
+__all__ = ['bag_of_run', 'recorded_evaluations', 'recorded_genomes', 'recorded_run',
+           'resume_point', 'ResumePoint', 'runs_continued', 'told_objectives']
