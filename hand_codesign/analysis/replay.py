@@ -59,7 +59,8 @@ def replay_command(arguments, write_mcap=None):
         raise UserError('--gui needs a display, and this session has none (DISPLAY is not '
                         'set); render an animation instead with --gif FILE')
     record = records.open_run(arguments.bag)
-    design = chosen_design(record, arguments.generation, arguments.rank)
+    design = chosen_design(record, arguments.generation, arguments.rank,
+                           getattr(arguments, 'candidate', None))
     task = records.design_task(record, design)
     worlds = world_states(task)
     if not 0 <= arguments.world < len(worlds):
@@ -88,8 +89,13 @@ def replay_command(arguments, write_mcap=None):
     return 0 if same else 1
 
 
-def chosen_design(record, generation, rank):
-    """Return the RecordedDesign that the flags choose."""
+def chosen_design(record, generation, rank, candidate=None):
+    """Return the RecordedDesign that the flags choose (candidate: an id, or None)."""
+    if candidate is not None:
+        if generation is not None or rank:
+            raise UserError(f'--candidate {candidate} names one design: drop --generation and '
+                            '--rank')
+        return records.recorded_design(record, candidate)
     if generation is None and not rank:
         candidate_id = records.best_candidate_id(record)
     else:

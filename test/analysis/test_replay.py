@@ -43,6 +43,13 @@ def test_replay_of_a_ranked_design_of_a_generation(real_run, tmp_path, capsys):
     assert 'bit for bit' in printed
 
 
+def test_replay_of_a_design_named_by_its_candidate_id(real_run, tmp_path, capsys):
+    assert main(['replay', str(real_run.bag), '--candidate', '7',
+                 '--gif', str(tmp_path / 'seven.gif')]) == 0
+    printed = capsys.readouterr().out
+    assert 'replaying candidate 7 of generation 1' in printed and 'bit for bit' in printed
+
+
 def test_a_changed_recording_is_reported_loudly(real_run, tmp_path, capsys):
     best = real_run.result['best_candidate_id']
 
@@ -72,6 +79,8 @@ def test_gui_without_a_display_says_so(real_run):
     (['--generation', '9'], 'no successful evaluation in generation 9 (generations in the '
                             'bag: 0..3)'),
     (['--generation', '0', '--rank', '6'], '--rank 6: generation 0 has 6 evaluated designs'),
+    (['--candidate', '99'], 'candidate 99 is not in the bag'),
+    (['--candidate', '7', '--rank', '1'], '--candidate 7 names one design: drop --generation'),
 ])
 def test_bad_choices_are_user_errors(real_run, tmp_path, capsys, flags, message):
     assert main(['replay', str(real_run.bag), '--gif', str(tmp_path / 'x.gif')] + flags) == 2
