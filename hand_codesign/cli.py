@@ -287,7 +287,8 @@ def add_bag_arguments(verb, parser):
                             help='rank within the generation, 0 = best')
         parser.add_argument('--candidate', type=int, metavar='ID',
                             help='the design of this candidate id instead (e.g. a design of '
-                                 'the final front; not with --generation or --rank)')
+                                 'the final front; not with --generation or --rank; default: '
+                                 'none)')
         parser.add_argument('--world', type=int, default=0, help='world state to replay')
         output = parser.add_mutually_exclusive_group()
         output.add_argument('--gif', help='write an animated GIF of the motion (default: none)')
