@@ -67,12 +67,14 @@ def result_run_id(path):
         return None
 
 
-def open_run(path, warn=True):
-    """Return the RunRecord of the bag at path (its result.json's run, if any); UserError."""
+def open_run(path, warn=True, run_id=None):
+    """Return the RunRecord of run_id, else of the bag's result.json run, if any; UserError."""
     try:
         try:
-            record = read_run(path, run_id=result_run_id(path))
+            record = read_run(path, run_id=run_id or result_run_id(path))
         except BagError:
+            if run_id:
+                raise
             record = read_run(path)
     except BagError as error:
         raise UserError(str(error)) from None

@@ -102,7 +102,7 @@ def runs_continued(record):
 def holds_first_candidate(record):
     """Return whether the bag holds candidate 0, which only a run's first generation asks."""
     candidates = record.candidates
-    return bool(len(candidates)) and 0 in set(np.asarray(candidates['candidate_id']).tolist())
+    return bool(len(candidates)) and bool(np.any(np.asarray(candidates['candidate_id']) == 0))
 
 
 def bag_of_run(run_id, beside):
@@ -111,7 +111,7 @@ def bag_of_run(run_id, beside):
     folder = beside.parent
     for entry in sorted(folder.iterdir()):
         if entry != beside and run_id in run_ids_of(entry):
-            return records.open_run(entry, warn=False)
+            return records.open_run(entry, warn=False, run_id=run_id)
     raise UserError(f'{beside}: run {run_id}, which this run continued, holds its first '
                     f'generations, and no bag in {folder} holds it: put that bag beside this '
                     'one to resume')

@@ -34,13 +34,13 @@ import numpy as np
 
 
 def final_front(bag):
-    """Return (task, weights, ids, genomes, objectives) of the finished run's final front."""
+    """Return (task, objective names, ids, genomes, objectives) of the run's final front."""
     record = records.open_run(bag, warn=False)
     task = records.run_task_of(record)
     search = Search(task)
     replay(search, *recorded_run(record))   # the runs it continued too
     result = search.optimizer.result
-    return (task, np.asarray(task.objective_weights), list(result.pareto_ids),
+    return (task, records.objective_names_of(record), list(result.pareto_ids),
             np.asarray(result.pareto_x), np.asarray(result.pareto_objectives))
 
 
@@ -69,7 +69,8 @@ def main():
     tolerances = [Tolerance(arguments.tolerance, arguments.limit)] + [
         Tolerance(kind, float(limit)) for kind, limit in
         (text.split(':') for text in arguments.also)]
-    task, weights, ids, genomes, objectives = final_front(arguments.bag)
+    task, names, ids, genomes, objectives = final_front(arguments.bag)
+    weights = np.asarray(task.objective_weights)
     header = ' | '.join(tolerance.describe() for tolerance in tolerances)
     screen = unseen_world_states(task, arguments.screen)
     screened, first_share = [], []
@@ -92,9 +93,8 @@ def main():
         within, median = shares(measure_worlds(genomes[index], task, worlds), tolerances)
         lines.append(row(f'{label} | {ids[index]}', within, median))
         print(lines[-1], flush=True)
-    names = ' | '.join(records.objective_names_of(records.open_run(arguments.bag, warn=False)))
     lines += ['', f'Every design of the front on {arguments.screen} unseen worlds:', '',
-              f'| candidate | {names} | weighted sum | {header} | median |',
+              f'| candidate | {" | ".join(names)} | weighted sum | {header} | median |',
               '|---' * (3 + len(objectives[0]) + len(tolerances)) + '|', *screened]
     pathlib.Path(arguments.out).with_suffix('.md').write_text('\n'.join(lines) + '\n')
 
