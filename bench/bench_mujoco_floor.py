@@ -88,10 +88,11 @@ def main():
                         help='worlds per evaluation (default 64, Table I)')
     parser.add_argument('--rounds', type=int, default=2, help='best of (default 2)')
     arguments = parser.parse_args()
+    paths = [task_file(name) for name in arguments.tasks]
     print(f'{"task":<18} {"designs":>7} {"evaluate s":>10} {"mj_step s":>10} '
           f'{"step share":>10}')
-    for name in arguments.tasks:
-        task = load_task(task_file(name)).replace(
+    for name, path in zip(arguments.tasks, paths):
+        task = load_task(path).replace(
             num_world_states=arguments.world_states, population=arguments.population, seed=1,
             iterations=10 ** 6)
         task = task.replace(physics=dataclasses.replace(task.physics, engine='mujoco'))
