@@ -4,9 +4,11 @@ Configurations and budgets that more than one experiment runs.
 The paper's grid of Tasks 5 and 6 (two algorithms on 8, 64 and 128 worlds), the levers of the
 search beyond the paper (restarts, the worst worlds, resampled worlds, quality diversity,
 racing over the worlds) on one preset, the presets' own lever (a preset choice of ours
-revisited), the fixed hand read with the palm beside the box, and the levers' budgets. A lever
-of one experiment alone lives in that experiment's module.
+revisited), the fixed hand read with the palm beside the box, the palm's placement searched,
+and the levers' budgets. A lever of one experiment alone lives in that experiment's module.
 """
+
+import math
 
 from hand_codesign.campaign.experiment import Budget
 from hand_codesign.campaign.experiment import Configuration
@@ -90,6 +92,31 @@ def palm_beside_configuration(name):
     """
     return Configuration('cma-palm-beside', f'{name}_palm_beside.yaml', 'cma', LEVER_WORLDS,
                          'torque')
+
+
+def placement_options(position_bounds, yaw_bounds):
+    """
+    Return the options that search the palm's place and its turn about the vertical.
+
+    Args:
+        position_bounds: ((x lower, x upper), (y lower, y upper), (z lower, z upper)) of the
+            palm centre in the world frame, m; a pair of equal values keeps that axis fixed.
+        yaw_bounds: (lower, upper) of the hand's turn about the world vertical through the
+            palm centre, rad, after the preset's base orientation.
+
+    Returns:
+        tuple of (dotted task key, value): hand.base_position and hand.base_yaw as bounds.
+    """
+    return (('hand.base_position', {'bounds': [list(pair) for pair in position_bounds]}),
+            ('hand.base_yaw', {'bounds': list(yaw_bounds)}))
+
+
+# A user's box around the palm hung above the box (Task 5's preset at (0, 0, 0.15)): 3 cm
+# either way in the plane, 2 cm up or down, and any turn about the vertical; a quarter turn
+# either way spans them all, as the two-finger hand turned by half a turn is the same hand
+# with its fingers swapped
+PLACEMENT_ABOVE = placement_options(((-0.03, 0.03), (-0.03, 0.03), (0.13, 0.17)),
+                                    (-math.pi / 2, math.pi / 2))
 
 
 def lever_budgets(paper_worlds):

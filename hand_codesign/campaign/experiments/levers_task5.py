@@ -20,10 +20,20 @@ from hand_codesign.campaign.shared import lever_budgets
 from hand_codesign.campaign.shared import lever_configurations
 from hand_codesign.campaign.shared import LEVER_WORLDS
 from hand_codesign.campaign.shared import palm_beside_configuration
+from hand_codesign.campaign.shared import PLACEMENT_ABOVE
 from hand_codesign.campaign.shared import preset_lever_configurations
 from hand_codesign.core.experiments.measures import ALONG_X_5MM
 from hand_codesign.core.experiments.measures import ALONG_Y_5MM
 from hand_codesign.core.experiments.measures import PLANE_5MM
+
+
+def placement_configurations():
+    """Return CMA-ES with the palm's placement searched, on Task 5 and on a goal along y."""
+    return (Configuration('cma-placed', 'task5.yaml', 'cma', LEVER_WORLDS, 'torque',
+                          PLACEMENT_ABOVE),
+            Configuration('cma-goal-y', 'task5_goal_y.yaml', 'cma', LEVER_WORLDS, 'torque'),
+            Configuration('cma-goal-y-placed', 'task5_goal_y.yaml', 'cma', LEVER_WORLDS,
+                          'torque', PLACEMENT_ABOVE))
 
 
 @add
@@ -39,6 +49,7 @@ def levers_task5():
         + preset_lever_configurations('task5_along_x.yaml', 'along-x')
         + (palm_beside_configuration('task5'),
            Configuration('cma-palm-beside-y', 'task5_palm_beside_y.yaml', 'cma', LEVER_WORLDS,
-                         'torque')), PLANE_5MM,
+                         'torque'))
+        + placement_configurations(), PLANE_5MM,
         lever_budgets(64), convergence=True, beyond_paper=True,
         also=(ALONG_X_5MM, ALONG_Y_5MM))

@@ -8,8 +8,11 @@ torque bound, finger placement) and on the smaller half of the boxes alone, and 
 CMA-MAE also spans its archive by the outcome limit_rest (`cma-mae-limit-rest-diagonal`);
 and levers on Task 6's paper hand (the palm beside the box, `cma-palm-beside-*`), among which
 the worst quarter of the worlds was chosen on tuning seeds 1 to 3 to lift its tail, and
-probes of it on the hardest boxes to turn alone. Not part of `reproduce all`.
+probes of it on the hardest boxes to turn alone; and that hand with the palm's placement searched
+with the rest of the design (`cma-palm-beside-placed`). Not part of `reproduce all`.
 """
+
+import math
 
 from hand_codesign.campaign.experiment import Configuration
 from hand_codesign.campaign.experiment import Experiment
@@ -19,10 +22,17 @@ from hand_codesign.campaign.shared import lever_budgets
 from hand_codesign.campaign.shared import lever_configurations
 from hand_codesign.campaign.shared import LEVER_WORLDS
 from hand_codesign.campaign.shared import palm_beside_configuration
+from hand_codesign.campaign.shared import placement_options
 from hand_codesign.campaign.shared import preset_lever_configurations
 from hand_codesign.campaign.shared import RESAMPLED
 from hand_codesign.campaign.shared import WORST_QUARTER
 from hand_codesign.core.experiments.measures import ORIENTATION_01
+
+# A user's box around the palm beside the box (the pinned preset's 7.5 cm from it): 6.5 to 9 cm
+# from the box, 2 cm to either side, at the preset's height, turned up to an eighth of a turn
+# either way about the vertical
+PLACEMENT_BESIDE = placement_options(((-0.09, -0.065), (-0.02, 0.02), (0.015, 0.015)),
+                                     (-math.pi / 4, math.pi / 4))
 
 
 def diagonal_hand_configurations():
@@ -95,6 +105,12 @@ def palm_beside_probe_configurations():
                           'cma', LEVER_WORLDS, 'torque', corner + FIVE_TIMES_TORQUE))
 
 
+def palm_beside_placed_configuration():
+    """Return CMA-ES on Task 6's paper hand with the palm's place and turn searched."""
+    return Configuration('cma-palm-beside-placed', 'task6_palm_beside.yaml', 'cma',
+                         LEVER_WORLDS, 'torque', PLACEMENT_BESIDE)
+
+
 @add
 def levers_task6():
     """Return the experiment: Task 6's levers, within 0.1 rad."""
@@ -109,11 +125,13 @@ def levers_task6():
         'each generation, both, with an initial step of 0.2, its palm 7 or 8.5 cm from '
         'the box, and its palm 7 cm from the box on the worst quarter; and, as probes, that '
         'hand trained and measured on the hardest boxes to turn (large, heavy, of high '
-        "friction), with Table I's torque bound and five times it",
+        "friction), with Table I's torque bound and five times it; and the pinned hand with "
+        "the palm's place and turn searched",
         lever_configurations('task6.yaml')
         + preset_lever_configurations('task6_diagonal.yaml', 'diagonal')
         + diagonal_hand_configurations() + (palm_beside_configuration('task6'),)
-        + palm_beside_lever_configurations() + palm_beside_probe_configurations(),
+        + palm_beside_lever_configurations() + palm_beside_probe_configurations()
+        + (palm_beside_placed_configuration(),),
         ORIENTATION_01,
         lever_budgets(128),
         convergence=True, beyond_paper=True)
