@@ -4,7 +4,8 @@ Why a PyBullet design does what it does in MuJoCo: the same design and world in 
 Modes on a campaign's committed design (`result-RUN.json`, whose task and genome
 campaign.measures.result_design rebuilds):
 
-- `worlds`: the final turn error of each unseen world in both engines (and, with
+- `worlds`: the final turn error (or, with --kind, the error in the plane or along an axis,
+  within Task 5's 5 mm) of each unseen world in both engines (and, with
   --pre-com-fix, in MuJoCo with the object's centre of mass where it sat before the fix:
   the body's start offset from the origin once more, on the box's top face), the cross table
   of within / not within 0.1 rad, and the worlds that succeed in PyBullet and fail in MuJoCo
@@ -17,14 +18,23 @@ campaign.measures.result_design rebuilds):
   (and on 40 where both succeed), each engine's first finger contact: the box's turn over the
   next 5 steps, its largest tilt and lift over the next 20, and the medians.
 - `slide`: Task 5's box launched along the ground at --speed m/s, nothing else touching it:
-  how high it rises in each engine (MuJoCo's convex contact model lifts a sliding body).
+  how high it rises in each engine (MuJoCo's convex contact model lifts a sliding body) and
+  how far it slides.
+- `drop`: Task 5's box moving down at --speed m/s from --gap mm above the ground: how much of
+  its approach speed each engine gives back when it lands (Bullet's hard contact none;
+  MuJoCo's soft contact pushes the penetration of the landing step back out).
+
+In every mode, --damping-ratio R runs MuJoCo with every contact's and joint limit's damping
+ratio at R instead of 1 (a probe, not a setting: the higher, the less a contact that built up
+within a step kicks back, and the softer it is).
 
 Usage: python bench/diagnose_transfer.py worlds RESULT.json [--preset P] [--unseen 1000]
-       [--pre-com-fix]
+       [--pre-com-fix] [--kind orientation|plane|x|y] [--damping-ratio R]
        python bench/diagnose_transfer.py trace RESULT.json WORLD [--every 10]
        python bench/diagnose_transfer.py gif RESULT.json WORLD --out FILE.gif
        python bench/diagnose_transfer.py impacts RESULT.json --errors FILE
        python bench/diagnose_transfer.py slide - [--speed 0.4]
+       python bench/diagnose_transfer.py drop - [--speed 0.4] [--gap 5]
 """
 
 import argparse
@@ -39,7 +49,8 @@ from hand_codesign.campaign.measures import result_design
 from hand_codesign.core import load_task
 from hand_codesign.core.design import FingerDesign, JointDesign
 from hand_codesign.core.evaluate import evaluate_design
-from hand_codesign.core.experiments.measures import measure_worlds, unseen_world_states
+from hand_codesign.core.experiments.measures import measure_worlds, start_and_goal_poses
+from hand_codesign.core.experiments.measures import unseen_world_states
 from hand_codesign.core.outcomes import CONTACT_DISTANCE, LIMIT_TOLERANCE
 from hand_codesign.core.sim import mujoco_sim
 from hand_codesign.core.sim.hand import hand_model
@@ -51,6 +62,9 @@ import mujoco
 import numpy as np
 
 TURN_LIMIT = 0.1  # rad
+# the error kinds `worlds --kind` compares, each with its task's tolerance and unit
+LIMITS = {'orientation': TURN_LIMIT, 'plane': 0.005, 'x': 0.005, 'y': 0.005}
+UNITS = {'orientation': 'rad', 'plane': 'mm', 'x': 'mm', 'y': 'mm'}
 SLIDE_STEPS = 40
 IMPACT_STEPS = 20  # steps after a first finger contact in which its tilt and lift are read
 
@@ -89,30 +103,47 @@ def design_and_tasks(result_path, preset):
 def worlds_mode(arguments):
     x, tasks = design_and_tasks(arguments.result, arguments.preset)
     worlds = unseen_world_states(tasks['pybullet'], arguments.unseen)
-    errors = {engine: measure_worlds(x, task, worlds).errors['orientation']
-              for engine, task in tasks.items()}
+    kind, limit, unit = arguments.kind, LIMITS[arguments.kind], UNITS[arguments.kind]
+    scale = 1000 if unit == 'mm' else 1
+    measured = {engine: measure_worlds(x, task, worlds) for engine, task in tasks.items()}
     if arguments.pre_com_fix:
         with pre_com_fix():
-            errors['mujoco-pre-fix'] = measure_worlds(x, tasks['mujoco'], worlds).errors[
-                'orientation']
-    for name, values in errors.items():
-        print(f'{name}: within {np.mean(values < TURN_LIMIT):.1%}, median '
-              f'{np.median(values):.3f} rad, p90 {np.percentile(values, 90):.3f} rad')
-    bullet, other = errors['pybullet'] < TURN_LIMIT, errors['mujoco'] < TURN_LIMIT
+            measured['mujoco-pre-fix'] = measure_worlds(x, tasks['mujoco'], worlds)
+    errors = {engine: measures.errors[kind] for engine, measures in measured.items()}
+    for name, measures in measured.items():
+        values = errors[name]
+        print(f'{name}: within {np.mean(values < limit):.1%}, median '
+              f'{np.median(values) * scale:.3f} {unit}, p90 '
+              f'{np.percentile(values, 90) * scale:.3f} {unit}; ends on a limit touching the '
+              f'box in {np.mean(measures.limit_contacts):.1%}')
+    bullet, other = errors['pybullet'] < limit, errors['mujoco'] < limit
     print(f'both within {np.mean(bullet & other):.1%}, PyBullet only '
           f'{np.mean(bullet & ~other):.1%}, MuJoCo only {np.mean(~bullet & other):.1%}, '
           f'neither {np.mean(~bullet & ~other):.1%}')
+    if kind in ('plane', 'position'):
+        goals = np.asarray(start_and_goal_poses(tasks['pybullet'], worlds)[1])[:, :2]
+        lost = bullet & ~other
+        for axis, column in (('x', 0), ('y', 1)):
+            signed = {engine: (measured[engine].final_positions[:, column] - goals[:, column])
+                      * 1000 for engine in ('pybullet', 'mujoco')}
+            print(f'  along {axis}, signed offset from the goal, median (mm) PyBullet / MuJoCo: '
+                  f'all worlds {np.median(signed["pybullet"]):+.2f} / '
+                  f'{np.median(signed["mujoco"]):+.2f}; worlds PyBullet only '
+                  f'{np.median(signed["pybullet"][lost]):+.2f} / '
+                  f'{np.median(signed["mujoco"][lost]):+.2f}')
     lost = np.flatnonzero(bullet & ~other)
     order = lost[np.argsort(-errors['mujoco'][lost])]
-    print('PyBullet within, MuJoCo not (worst first): world, error PyBullet, MuJoCo, mass factor, '
-          'scale, friction')
+    print(f'PyBullet within, MuJoCo not (worst first): world, {kind} error PyBullet, MuJoCo '
+          f'({unit}), mass factor, scale, friction')
     for index in order[:arguments.show]:
         world = worlds[index]
-        print(f'  {index:4d} {errors["pybullet"][index]:.3f} {errors["mujoco"][index]:.3f} '
-              f'{world.mass_factor:.3f} {world.scale:.3f} {world.friction_delta:+.3f}')
+        print(f'  {index:4d} {errors["pybullet"][index] * scale:.3f} '
+              f'{errors["mujoco"][index] * scale:.3f} {world.mass_factor:.3f} '
+              f'{world.scale:.3f} {world.friction_delta:+.3f}')
     if arguments.save:
         pathlib.Path(arguments.save).write_text(json.dumps(
-            {name: values.tolist() for name, values in errors.items()}) + '\n')
+            {name: values.tolist() for name, values in errors.items()}
+            | {'kind': kind, 'limit': limit}) + '\n')
 
 
 def _yaw_tilt(quaternion):
@@ -262,8 +293,9 @@ def impacts_mode(arguments):
     x, tasks = design_and_tasks(arguments.result, arguments.preset)
     worlds = unseen_world_states(tasks['pybullet'], arguments.unseen)
     errors = json.loads(pathlib.Path(arguments.errors).read_text())
-    bullet = np.array(errors['pybullet']) < TURN_LIMIT
-    other = np.array(errors['mujoco']) < TURN_LIMIT
+    limit = errors.get('limit', TURN_LIMIT)
+    bullet = np.array(errors['pybullet']) < limit
+    other = np.array(errors['mujoco']) < limit
     groups = {'PyBullet within, MuJoCo not': np.flatnonzero(bullet & ~other),
               'both within (first 40)': np.flatnonzero(bullet & other)[:40]}
     for name, indices in groups.items():
@@ -283,63 +315,101 @@ def impacts_mode(arguments):
               f'{np.median(values[:, 2]) * 1000:.2f} / {np.median(values[:, 5]) * 1000:.2f} mm')
 
 
-def slide_mode(arguments):
+def box_scene():
+    """Return (task, hand model, nominal box state): Task 5's box, short fingers far above it."""
     task = load_task(pathlib.Path(__file__).resolve().parents[1] / 'config' / 'tasks'
                      / 'task5.yaml')
     base = genome_spec(task).decode(genome_spec(task).initial_mean())
     joints = (JointDesign(axis_angle=np.pi / 2, initial_angle=0.0, lower_limit=-1.2,
                           upper_limit=1.2),) * 2
     fingers = tuple(FingerDesign(position=(x, 0.0), segment_lengths=(0.04, 0.04), joints=joints)
-                    for x in (-0.055, 0.055))  # short fingers far above the box
+                    for x in (-0.055, 0.055))
     hand = dataclasses.replace(base.hand, fingers=fingers)
-    model = hand_model(hand, task.hand)
-    state = object_state(task, WorldState.nominal())
-    speed = arguments.speed
-    heights = {}
+    return task, hand_model(hand, task.hand), object_state(task, WorldState.nominal())
+
+
+def launched(velocity, lift=0.0):
+    """
+    Return {engine: (positions (steps, 3) m, velocities (steps, 3) m/s)} of the free box.
+
+    The box starts `lift` m above its resting pose with the linear `velocity` (m/s, world
+    frame), nothing else touching it, and is stepped SLIDE_STEPS times in each engine.
+    """
+    task, model, state = box_scene()
+    state = dataclasses.replace(state, position=np.asarray(state.position) + (0.0, 0.0, lift))
+    paths = {}
     with Simulator() as simulator:
         simulator.build(task, model)
         body = simulator.create_object(state, simulator.object_shape(state, 'box'))
         client = simulator.client
-        client.resetBaseVelocity(body, [speed, 0.0, 0.0], [0.0, 0.0, 0.0])
-        heights['pybullet'] = []
+        client.resetBaseVelocity(body, list(velocity), [0.0, 0.0, 0.0])
+        rows = []
         for _ in range(SLIDE_STEPS):
             client.stepSimulation()
-            heights['pybullet'].append(client.getBasePositionAndOrientation(body)[0][2])
+            rows.append((client.getBasePositionAndOrientation(body)[0],
+                         client.getBaseVelocity(body)[0]))
+        paths['pybullet'] = rows
     with MujocoSimulator() as simulator:
         simulator.build(task.replace(physics=dataclasses.replace(task.physics, engine='mujoco')),
                         model)
         simulator.reset(state, 'box')
         m, d = simulator.mj_model, simulator.mj_data
-        d.qvel[simulator._joints] = speed
-        heights['mujoco'] = []
+        linear = slice(simulator._joints, simulator._joints + 3)  # the free joint's x, y, z
+        d.qvel[linear] = velocity
+        rows = []
         for _ in range(SLIDE_STEPS):
             mujoco.mj_step(m, d)
-            heights['mujoco'].append(simulator.object_pose()[0][2])
-    for engine, values in heights.items():
-        lift = (np.array(values) - state.position[2]) * 1000
+            rows.append((simulator.object_pose()[0], d.qvel[linear].copy()))
+        paths['mujoco'] = rows
+    return {engine: (np.array([row[0] for row in rows]), np.array([row[1] for row in rows]))
+            for engine, rows in paths.items()}
+
+
+def slide_mode(arguments):
+    _, _, state = box_scene()
+    speed = arguments.speed
+    coulomb = speed ** 2 / (2 * state.friction * 9.81) * 1000
+    for engine, (positions, _) in launched((speed, 0.0, 0.0)).items():
+        lift = (positions[:, 2] - state.position[2]) * 1000
+        slid = (positions[-1, 0] - state.position[0]) * 1000
         print(f'{engine}: box launched at {speed} m/s (friction {state.friction}); over '
               f'{SLIDE_STEPS} steps its height above rest ranges {lift.min():+.3f} to '
-              f'{lift.max():+.3f} mm')
+              f'{lift.max():+.3f} mm; it slides {slid:.1f} mm (Coulomb friction at this '
+              f'coefficient stops it after {coulomb:.1f} mm)')
+
+
+def drop_mode(arguments):
+    speed, gap = arguments.speed, arguments.gap / 1000
+    for engine, (_, velocities) in launched((0.0, 0.0, -speed), gap).items():
+        print(f'{engine}: box moving down at {speed} m/s from {arguments.gap} mm above the '
+              f'ground: at most {velocities[:, 2].max():+.3f} m/s upward after it lands, '
+              f'{velocities[:, 2].max() / speed:.2f} of the approach speed')
 
 
 def main():
     """Run one mode."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
-    parser.add_argument('mode', choices=('worlds', 'trace', 'gif', 'impacts', 'slide'))
+    parser.add_argument('mode', choices=('worlds', 'trace', 'gif', 'impacts', 'slide', 'drop'))
     parser.add_argument('result')
     parser.add_argument('world', type=int, nargs='?', default=0)
     parser.add_argument('--preset', default='task6_palm_beside.yaml')
     parser.add_argument('--unseen', type=int, default=1000)
     parser.add_argument('--pre-com-fix', action='store_true')
+    parser.add_argument('--kind', choices=tuple(LIMITS), default='orientation')
+    parser.add_argument('--damping-ratio', type=float, default=0.0)
     parser.add_argument('--show', type=int, default=15)
     parser.add_argument('--save', default='')
     parser.add_argument('--every', type=int, default=10)
     parser.add_argument('--out', default='diagnose.gif')
     parser.add_argument('--speed', type=float, default=0.4)
+    parser.add_argument('--gap', type=float, default=5.0)
     parser.add_argument('--errors', default='')
     arguments = parser.parse_args()
+    if arguments.damping_ratio:
+        # a probe, not a setting: every MuJoCo contact's and limit's damping ratio
+        mujoco_sim.SOLREF_DAMPING_RATIO = arguments.damping_ratio
     {'worlds': worlds_mode, 'trace': trace_mode, 'gif': gif_mode, 'impacts': impacts_mode,
-     'slide': slide_mode}[arguments.mode](arguments)
+     'slide': slide_mode, 'drop': drop_mode}[arguments.mode](arguments)
 
 
 if __name__ == '__main__':
