@@ -171,7 +171,8 @@ def test_task6_paper_hand_levers_change_one_thing_each_or_two_together():
     text = (definition.pinned_dir() / 'task6_palm_beside.yaml').read_text()
     pinned = parse_task(text).replace(source_text='')
     by_key = {c.key: c for c in experiments.EXPERIMENTS['levers-task6'].configurations
-              if c.key.startswith('cma-palm-beside-') and 'hardest' not in c.key}
+              if c.key.startswith('cma-palm-beside-') and 'hardest' not in c.key
+              and not c.key.endswith('-placed')}
     assert len(by_key) == 7 and all(c.preset == 'task6_palm_beside.yaml'
                                     for c in by_key.values())
 
@@ -200,6 +201,38 @@ def test_task6_paper_hand_levers_change_one_thing_each_or_two_together():
     assert together.replace(hand=pinned.hand, worlds=pinned.worlds) == pinned
     assert together.hand == lever('cma-palm-beside-palm-70mm').hand
     assert together.worlds == worst.worlds
+
+
+@pytest.mark.parametrize('experiment, key, preset, genes', [
+    ('levers-task5', 'cma-placed', 'task5.yaml', 4),
+    ('levers-task5', 'cma-goal-y-placed', 'task5_goal_y.yaml', 4),
+    ('levers-task6', 'cma-palm-beside-placed', 'task6_palm_beside.yaml', 3)])
+def test_placed_levers_search_the_palm_around_the_presets_own_placement(experiment, key,
+                                                                       preset, genes):
+    # the palm's place and turn searched, nothing else changed: the preset's own placement
+    # lies inside the bounds, and each range wider than a point is one more gene
+    text = (definition.pinned_dir() / preset).read_text()
+    pinned = parse_task(text).replace(source_text='')
+    configuration, = [c for c in experiments.EXPERIMENTS[experiment].configurations
+                      if c.key == key]
+    assert configuration.preset == preset
+    placed = parse_task(definition.configuration_task_text(configuration, text)).replace(
+        source_text='')
+    assert placed.hand.placement_searched and not pinned.hand.placement_searched
+    for value, bounds in zip(pinned.hand.base_position, placed.hand.base_position_bounds):
+        assert bounds.lower <= value <= bounds.upper
+    assert placed.hand.base_yaw_bounds.lower < 0.0 < placed.hand.base_yaw_bounds.upper
+    assert placed.replace(hand=pinned.hand) == pinned
+    assert genome_spec(placed).size == genome_spec(pinned).size + genes
+
+
+def test_the_goal_along_y_moves_the_goal_alone():
+    # a user's goal in a new direction: Task 5 with its goal 1 cm along y instead of x
+    paper = parse_task((definition.pinned_dir() / 'task5.yaml').read_text())
+    along_y = parse_task((definition.pinned_dir() / 'task5_goal_y.yaml').read_text())
+    np.testing.assert_allclose(paper.goals.position[0].position, (0.01, 0.0, 0.02))
+    np.testing.assert_allclose(along_y.goals.position[0].position, (0.0, 0.01, 0.02))
+    assert along_y.replace(goals=paper.goals, source_text='') == paper.replace(source_text='')
 
 
 def test_task6_hardest_boxes_probes_narrow_the_worlds_to_their_corner():
