@@ -207,8 +207,8 @@ def test_task6_paper_hand_levers_change_one_thing_each_or_two_together():
     ('levers-task5', 'cma-placed', 'task5.yaml', 4),
     ('levers-task5', 'cma-goal-y-placed', 'task5_goal_y.yaml', 4),
     ('levers-task6', 'cma-palm-beside-placed', 'task6_palm_beside.yaml', 3)])
-def test_placed_levers_search_the_palm_around_the_presets_own_placement(experiment, key,
-                                                                       preset, genes):
+def test_placed_levers_search_the_palm_around_the_presets_own_placement(
+        experiment, key, preset, genes):
     # the palm's place and turn searched, nothing else changed: the preset's own placement
     # lies inside the bounds, and each range wider than a point is one more gene
     text = (definition.pinned_dir() / preset).read_text()
