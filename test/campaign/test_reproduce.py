@@ -206,6 +206,7 @@ def test_task6_paper_hand_levers_change_one_thing_each_or_two_together():
 @pytest.mark.parametrize('experiment, key, preset, genes', [
     ('levers-task5', 'cma-placed', 'task5.yaml', 4),
     ('levers-task5', 'cma-goal-y-placed', 'task5_goal_y.yaml', 4),
+    ('levers-task5', 'cma-goal-y-placed-sigma-0.3', 'task5_goal_y.yaml', 4),
     ('levers-task6', 'cma-palm-beside-placed', 'task6_palm_beside.yaml', 3)])
 def test_placed_levers_search_the_palm_around_the_presets_own_placement(
         experiment, key, preset, genes):
@@ -222,7 +223,8 @@ def test_placed_levers_search_the_palm_around_the_presets_own_placement(
     for value, bounds in zip(pinned.hand.base_position, placed.hand.base_position_bounds):
         assert bounds.lower <= value <= bounds.upper
     assert placed.hand.base_yaw_bounds.lower < 0.0 < placed.hand.base_yaw_bounds.upper
-    assert placed.replace(hand=pinned.hand) == pinned
+    assert placed.replace(hand=pinned.hand, initial_sigma=pinned.initial_sigma) == pinned
+    assert placed.initial_sigma == (0.3 if key.endswith('sigma-0.3') else pinned.initial_sigma)
     assert genome_spec(placed).size == genome_spec(pinned).size + genes
 
 

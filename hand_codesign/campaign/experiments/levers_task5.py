@@ -28,12 +28,22 @@ from hand_codesign.core.experiments.measures import PLANE_5MM
 
 
 def placement_configurations():
-    """Return CMA-ES with the palm's placement searched, on Task 5 and on a goal along y."""
+    """
+    Return CMA-ES with the palm's placement searched, on Task 5 and on a goal along y.
+
+    And on the goal along y with three times the initial step (0.3 of every gene's range): the
+    search starts from the middle of the placement's bounds, the hand as the preset turns it,
+    where pushing the box only moves it away from a goal across the fingers' plane; a quarter
+    turn is five of the default steps away.
+    """
     return (Configuration('cma-placed', 'task5.yaml', 'cma', LEVER_WORLDS, 'torque',
                           PLACEMENT_ABOVE),
             Configuration('cma-goal-y', 'task5_goal_y.yaml', 'cma', LEVER_WORLDS, 'torque'),
             Configuration('cma-goal-y-placed', 'task5_goal_y.yaml', 'cma', LEVER_WORLDS,
-                          'torque', PLACEMENT_ABOVE))
+                          'torque', PLACEMENT_ABOVE),
+            Configuration('cma-goal-y-placed-sigma-0.3', 'task5_goal_y.yaml', 'cma',
+                          LEVER_WORLDS, 'torque',
+                          PLACEMENT_ABOVE + (('optimizer.initial_sigma', 0.3),)))
 
 
 @add
