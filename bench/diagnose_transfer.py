@@ -120,9 +120,9 @@ def worlds_mode(arguments):
     print(f'both within {np.mean(bullet & other):.1%}, PyBullet only '
           f'{np.mean(bullet & ~other):.1%}, MuJoCo only {np.mean(~bullet & other):.1%}, '
           f'neither {np.mean(~bullet & ~other):.1%}')
+    lost = bullet & ~other
     if unit == 'mm':  # a position error: where the box ends, signed, along each axis
         goals = np.asarray(start_and_goal_poses(tasks['pybullet'], worlds)[1])[:, :2]
-        lost = bullet & ~other
         for axis, column in (('x', 0), ('y', 1)):
             signed = {engine: (measured[engine].final_positions[:, column] - goals[:, column])
                       * 1000 for engine in ('pybullet', 'mujoco')}
@@ -131,8 +131,8 @@ def worlds_mode(arguments):
                   f'{np.median(signed["mujoco"]):+.2f}; worlds PyBullet only '
                   f'{np.median(signed["pybullet"][lost]):+.2f} / '
                   f'{np.median(signed["mujoco"][lost]):+.2f}')
-    lost = np.flatnonzero(bullet & ~other)
-    order = lost[np.argsort(-errors['mujoco'][lost])]
+    indices = np.flatnonzero(lost)
+    order = indices[np.argsort(-errors['mujoco'][indices])]
     print(f'PyBullet within, MuJoCo not (worst first): world, {kind} error PyBullet, MuJoCo '
           f'({unit}), mass factor, scale, friction')
     for index in order[:arguments.show]:

@@ -8,8 +8,6 @@ revisited), the fixed hand read with the palm beside the box, the palm's placeme
 and the levers' budgets. A lever of one experiment alone lives in that experiment's module.
 """
 
-import math
-
 from hand_codesign.campaign.experiment import Budget
 from hand_codesign.campaign.experiment import Configuration
 
@@ -109,14 +107,6 @@ def placement_options(position_bounds, yaw_bounds):
     """
     return (('hand.base_position', {'bounds': [list(pair) for pair in position_bounds]}),
             ('hand.base_yaw', {'bounds': list(yaw_bounds)}))
-
-
-# A user's box around the palm hung above the box (Task 5's preset at (0, 0, 0.15)): 3 cm
-# either way in the plane, 2 cm up or down, and any turn about the vertical; a quarter turn
-# either way spans them all, as the two-finger hand turned by half a turn is the same hand
-# with its fingers swapped
-PLACEMENT_ABOVE = placement_options(((-0.03, 0.03), (-0.03, 0.03), (0.13, 0.17)),
-                                    (-math.pi / 2, math.pi / 2))
 
 
 def lever_budgets(paper_worlds):

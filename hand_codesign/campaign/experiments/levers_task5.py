@@ -13,6 +13,8 @@ span and limit_rest, core.outcomes); and the fixed hand read with the palm besid
 its fingers along x or along y. Not part of `reproduce all`.
 """
 
+import math
+
 from hand_codesign.campaign.experiment import Configuration
 from hand_codesign.campaign.experiment import Experiment
 from hand_codesign.campaign.registry import add
@@ -20,11 +22,18 @@ from hand_codesign.campaign.shared import lever_budgets
 from hand_codesign.campaign.shared import lever_configurations
 from hand_codesign.campaign.shared import LEVER_WORLDS
 from hand_codesign.campaign.shared import palm_beside_configuration
-from hand_codesign.campaign.shared import PLACEMENT_ABOVE
+from hand_codesign.campaign.shared import placement_options
 from hand_codesign.campaign.shared import preset_lever_configurations
 from hand_codesign.core.experiments.measures import ALONG_X_5MM
 from hand_codesign.core.experiments.measures import ALONG_Y_5MM
 from hand_codesign.core.experiments.measures import PLANE_5MM
+
+# A user's box around the palm hung above the box (Task 5's preset at (0, 0, 0.15)): 3 cm
+# either way in the plane, 2 cm up or down, and any turn about the vertical; a quarter turn
+# either way spans them all, as the two-finger hand turned by half a turn is the same hand
+# with its fingers swapped
+PLACEMENT_ABOVE = placement_options(((-0.03, 0.03), (-0.03, 0.03), (0.13, 0.17)),
+                                    (-math.pi / 2, math.pi / 2))
 
 
 def placement_configurations():
