@@ -1,5 +1,6 @@
 """Tasks 1 and 2's stand-in seeds hold their objects in midair, as [7]'s designs do (issue 45)."""
 
+import importlib.util
 import itertools
 import pathlib
 
@@ -9,11 +10,15 @@ from hand_codesign.core.sim.pybullet_sim import Simulator
 from hand_codesign.core.sim.worlds import object_state
 from hand_codesign.core.sim.worlds import WorldState
 from hand_codesign.core.task import load_task
+from hand_codesign.core.task import parse_task
 from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.core.task.genome import seed_genome
 import pytest
+import yaml
 
-TASKS = pathlib.Path(__file__).resolve().parents[3] / 'config' / 'tasks'
+ROOT = pathlib.Path(__file__).resolve().parents[3]
+TASKS = ROOT / 'config' / 'tasks'
+TOOLS = ROOT / 'tools'
 PALM = -1  # the hand's base link
 SETTLING = 0.5  # s: the object falls into the closing fingers before this
 # The preset, and how far (m) its object may sink below its start: Task 1's capsule settles
@@ -70,3 +75,31 @@ def test_the_seed_starts_free_of_collisions_in_every_corner_of_the_worlds(name):
             state = object_state(task, WorldState.from_values(values))
             shape = simulator.object_shape(state, task.object_spec.shape)
             assert not simulator.start_collisions([(state, shape)]), values
+
+
+def test_the_turning_seed_turns_the_capsule_in_the_nominal_world_and_holds_it():
+    """task1_turning.yaml's seed does [7]'s part, the cradle of task1.yaml leaves it undone."""
+    turned, held = {}, {}
+    for name in ('task1.yaml', 'task1_turning.yaml'):
+        task = load_task(TASKS / name).replace(early_termination=None)
+        with Simulator() as simulator:
+            evaluation = evaluate_design(seed_design(task), task, [WorldState.nominal()],
+                                         simulator=simulator)
+        assert not evaluation.collision and evaluation.unstable_worlds == 0
+        turned[name] = evaluation.final_errors[0][1]  # rad from the 90 degree goal
+        held[name] = evaluation.final_poses[0][2] - task.object_spec.position[2]
+    assert turned['task1.yaml'] > 1.4 and turned['task1_turning.yaml'] < 0.4, turned
+    assert all(-0.1 < sink < 0.01 for sink in held.values()), held
+
+
+def test_seed_task_puts_an_exported_design_in_place_of_the_seed_and_keeps_the_rest():
+    spec = importlib.util.spec_from_file_location('seed_task', TOOLS / 'seed_task.py')
+    seed_task = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(seed_task)
+    turning = yaml.safe_load((TASKS / 'task1_turning.yaml').read_text())['seed_design']
+    text = seed_task.seeded_text((TASKS / 'task1.yaml').read_text(), turning, 'a test')
+    assert 'V-shaped cradle' not in text  # the old seed's comments went with it
+    written = parse_task(text)
+    assert written.seed_design == load_task(TASKS / 'task1_turning.yaml').seed_design
+    assert written.replace(source='', source_text='') == load_task(TASKS / 'task1.yaml').replace(
+        seed_design=written.seed_design, source='', source_text='')
