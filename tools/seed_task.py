@@ -14,6 +14,7 @@ Usage: python tools/seed_task.py TASK.yaml EXPORT_DIR OUT.yaml   (from the repos
 import argparse
 import pathlib
 import sys
+import textwrap
 
 from hand_codesign.analysis.export import load_export
 from hand_codesign.core.task import load_task
@@ -41,8 +42,9 @@ def without_block(text, key):
 def seeded_text(task_text, design, source):
     """Return task_text with its seed_design replaced by `design` (a plain mapping)."""
     block = yaml.safe_dump({'seed_design': design}, sort_keys=False, default_flow_style=None)
-    return '\n'.join(without_block(task_text, 'seed_design')
-                     + ['', f'# The seed design: {source}', block.rstrip()]) + '\n'
+    heading = textwrap.wrap(f'The seed design: {source}.', 93, break_on_hyphens=False)
+    return '\n'.join(without_block(task_text, 'seed_design') + ['']
+                     + [f'# {line}' for line in heading] + [block.rstrip()]) + '\n'
 
 
 def main():

@@ -3,9 +3,9 @@ Fig. 2 of the paper: Task 1 seeded from the starting hand against Task 3 from sc
 
 CMA-ES on Task 1 (PD, and the torque variant) and MO-CMA-ES on Task 3 (torques), their
 convergence drawn side by side. Beside them, Task 1 seeded from a stand-in that already turns
-the capsule in the nominal world, as [7]'s results do (task1_turning.yaml, made by
-config/tasks/task1_stand_in_search.yaml): the pinned task1.yaml's stand-in leaves the whole turn
-to the search.
+the capsule in the nominal world, as [7]'s results do (task1_turning.yaml, made by the search
+in config/stand-ins/task1_stand_in_search.yaml); the pinned task1.yaml's stand-in leaves the
+whole turn to the search.
 """
 
 from hand_codesign.campaign.experiment import budgets

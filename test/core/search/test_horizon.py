@@ -157,7 +157,7 @@ def test_task3_spreads_more_with_a_horizon():
 
 @pytest.mark.system  # a long physics run (a minute or more here)
 def test_task2_follows_the_growing_horizon_to_a_better_whole_rollout():
-    task = load_run_task(TASKS / 'task2.yaml', seed=2, iterations=6, population=12,
+    task = load_run_task(TASKS / 'task2_there_and_back.yaml', seed=2, iterations=6, population=12,
                          world_states=4).replace(two_stage=False)  # the horizon alone
     plain_task = without_horizon(task)
     plain_search, plain, _ = search_run(plain_task, 6)

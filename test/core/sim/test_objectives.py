@@ -266,9 +266,9 @@ def test_relative_goals_ask_for_the_same_world_turn_whatever_the_start_axis():
 
 
 def test_presets_build_schedules():
-    task2 = goal_schedule(load_task(TASKS / 'task2.yaml'))
-    assert task2.num_checks == 40 and task2.termination.all()
-    assert task2.num_steps == 800 and task2.check_step_list[-1] == 800
+    task2 = goal_schedule(load_task(TASKS / 'task2.yaml'))  # 2 s, ten checks a second
+    assert task2.num_checks == 20 and task2.termination.all()
+    assert task2.num_steps == 400 and task2.check_step_list[-1] == 400
     task4 = goal_schedule(load_task(TASKS / 'task4.yaml'))
     assert task4.check_step_list == (200,) and list(task4.objective_sizes) == [1, 1]
 

@@ -196,15 +196,18 @@ def drive_along_goals(task, design):
 
 
 @pytest.mark.parametrize('axis', sorted(AXES))
-def test_a_sphere_driven_along_its_goals_in_pybullet_scores_zero(axis):
-    """Task 2: turn 180 degrees and back, relative goals, early termination armed."""
-    task = turned_about(TASKS / 'task2.yaml', axis).replace(num_world_states=4)
+@pytest.mark.parametrize('preset, turn', [('task2.yaml', math.pi),
+                                          ('task2_there_and_back.yaml', 0.0)])
+def test_a_sphere_driven_along_its_goals_in_pybullet_scores_zero(axis, preset, turn):
+    """Task 2: a half turn (or, read as one motion, there and back), early termination armed."""
+    task = turned_about(TASKS / preset, axis).replace(num_world_states=4)
     result = drive_along_goals(task, held_still(task.seed_design, task))
     assert not result.collision and result.unstable_worlds == 0
     assert result.simulated_time == pytest.approx(4 * task.duration)  # never stopped early
     assert np.abs(result.objectives).max() < TOLERANCE, result.objectives
     assert np.abs(result.final_errors).max() < TOLERANCE
-    assert result.initial_errors[:, 1] == pytest.approx([0.0] * 4, abs=1e-9)  # ends unturned
+    # the start, against the last goal: a half turn away, or where the motion ends
+    assert result.initial_errors[:, 1] == pytest.approx([turn] * 4, abs=1e-9)
 
 
 def test_a_box_driven_along_its_goals_in_pybullet_scores_zero():
