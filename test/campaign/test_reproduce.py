@@ -571,14 +571,15 @@ def test_every_preset_and_table_named_in_results_exists_and_checks():
     pages = [ROOT / 'docs' / 'RESULTS.md',
              *sorted((ROOT / 'docs' / 'results').glob('*/README.md'))]
     text = '\n'.join(page.read_text(encoding='utf-8') for page in pages)
-    presets = set(re.findall(r'(?:config/(?:tasks|reproduce)/)?(\w+\.yaml)', text))
+    presets = set(re.findall(r'(?:config/(?:tasks|reproduce|stand-ins)/)?(\w+\.yaml)', text))
     presets -= {'smaller.yaml', 'campaign.yaml'}
     assert {'task5.yaml', 'task6.yaml', 'task5_along_x.yaml', 'task6_diagonal.yaml'} <= presets
     for name in sorted(presets):
         found = [folder / name for folder in (ROOT / 'config' / 'tasks',
-                                              ROOT / 'config' / 'reproduce')
+                                              ROOT / 'config' / 'reproduce',
+                                              ROOT / 'config' / 'stand-ins')
                  if (folder / name).exists()]
-        assert found, f'the results pages name {name}, which is in neither config folder'
+        assert found, f'the results pages name {name}, which is in no config folder'
         for path in found:
             load_task(path)
     for table in set(re.findall(r'(?:docs/)?(results/[\w.-]+/[\w.-]+\.(?:md|csv|png))', text)):
