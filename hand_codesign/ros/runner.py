@@ -27,6 +27,7 @@ and root, like a 0600 file, without a file to leave behind) and never in the bag
 recorder gets no key, and the nodes remove the variable from their environment once read.
 """
 
+import collections
 import contextlib
 import fcntl
 import os
@@ -54,6 +55,7 @@ from hand_codesign.ros.lifeline import runner_environment
 DOMAIN_IDS = range(1, 101)   # those a free pick (--domain-id auto) takes
 MAX_DOMAIN_ID = 232   # the highest ROS_DOMAIN_ID ROS 2 accepts
 STOP_TIMEOUT = 30.0
+LAST_MESSAGES = 20   # the optimizer's last lines a quiet run that fails still prints
 # s a finished run waits for the robot view to play its final best design's rollout (a rollout
 # lasts a few simulated seconds, played in real time)
 ROBOT_VIEW_WAIT = 30.0
@@ -117,6 +119,7 @@ class System:
         self.rig_nodes = []
         self.rig_parameters = {}
         self.optimizer = None
+        self.last_messages = collections.deque(maxlen=LAST_MESSAGES)
         self.relay = None
 
     def say(self, text):
@@ -188,6 +191,10 @@ class System:
         self.relay.join(timeout=5.0)
         if code == 0:
             self.wait_for_robot_view()
+        elif self.quiet and self.optimizer.returncode == code:
+            # quiet hides the optimizer's messages; its reason for failing must still show
+            for text in self.last_messages:
+                print(text, file=sys.stderr, flush=True)
         self.stop_all()
         return code
 
@@ -278,14 +285,20 @@ class System:
         return lines[-1]
 
     def relay_optimizer(self):
-        for line in self.optimizer.stdout:
-            if EVALUATORS_READY in line:
-                self.supervisor.optimizer_ready()
-            text = line.rstrip().replace('[INFO] [optimizer]: ', '')
-            if text.startswith(PROGRESS_PREFIX):
-                self.say_progress(text)
-            else:
-                self.say(text)
+        """Relay the optimizer's output to the user and into logs/optimizer.log, keeping its
+        last messages (not progress) for a quiet run that fails."""
+        with open(self.bag / 'logs' / 'optimizer.log', 'w') as log:
+            for line in self.optimizer.stdout:
+                log.write(line)
+                log.flush()
+                if EVALUATORS_READY in line:
+                    self.supervisor.optimizer_ready()
+                text = line.rstrip().replace('[INFO] [optimizer]: ', '')
+                if text.startswith(PROGRESS_PREFIX):
+                    self.say_progress(text)
+                else:
+                    self.last_messages.append(text)
+                    self.say(text)
 
     def supervise(self):
         """Keep recorder and evaluators alive until the optimizer ends; return the run's code."""

@@ -24,6 +24,7 @@ from hand_codesign.bag.reader import read_run
 from hand_codesign.core.run.signing import new_secret
 from hand_codesign.core.run.signing import RunKeys
 from hand_codesign.ros.runner import claimed_domain
+from hand_codesign.ros.runner import System
 from intruder import FORGED_SUMMARIES
 import numpy as np
 import psutil
@@ -485,3 +486,19 @@ def test_run_joins_the_ros_domain_of_the_users_shell(tmp_path):
     assert run.returncode == 0, run.stdout + run.stderr
     assert f"ROS_DOMAIN_ID={domain} (the environment's ROS_DOMAIN_ID)" in run.stdout
     assert int(heard) >= 1, run.stdout + run.stderr
+
+
+def test_a_quiet_run_whose_optimizer_fails_still_says_why_and_logs_it(tmp_path, capsys):
+    bag = tmp_path / 'failed'
+    with claimed_domain(None) as domain:
+        system = System(bag, domain, quiet=True)
+        try:
+            code = system.run(0, 'hand_codesign.commands.optimizer',
+                              {'task_file': str(TASK), 'population': -3})
+        finally:
+            system.stop_all()
+    reason = 'Parameter population out of range'
+    assert code == 2
+    assert reason in capsys.readouterr().err
+    assert reason in (bag / 'logs' / 'optimizer.log').read_text()
+    assert all(process.poll() is not None for process in (system.optimizer, system.recorder))
