@@ -24,8 +24,11 @@ import yaml
 
 
 def without_block(text, key):
-    """Return the lines of a YAML text without its top-level `key:` block and the comment
-    lines right above it (they describe it)."""
+    """
+    Return the lines of a YAML text without its top-level `key:` block and its comments.
+
+    The comment lines right above the key are taken as its own: they describe it.
+    """
     kept, skipping = [], False
     for line in text.splitlines():
         if line[:1] not in ('', ' ', '#'):  # a top-level key

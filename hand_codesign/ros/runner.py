@@ -285,8 +285,11 @@ class System:
         return lines[-1]
 
     def relay_optimizer(self):
-        """Relay the optimizer's output to the user and into logs/optimizer.log, keeping its
-        last messages (not progress) for a quiet run that fails."""
+        """
+        Relay the optimizer's output to the user and into logs/optimizer.log.
+
+        Its last messages (not progress lines) are kept for a quiet run that fails.
+        """
         with open(self.bag / 'logs' / 'optimizer.log', 'w') as log:
             for line in self.optimizer.stdout:
                 log.write(line)
