@@ -21,9 +21,11 @@ def test_every_module_of_the_experiments_registers_one_listed_experiment():
 def test_reproduce_lists_the_papers_experiments_first_and_all_runs_those():
     assert experiments.experiment_names() == [
         'task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded',
-        'task4-structures', 'task3-levers', 'levers-task5', 'levers-task6', 'all']
+        'task2-seeded', 'task4-structures', 'task3-levers', 'levers-task5', 'levers-task6',
+        'all']
     assert [experiment.name for experiment in experiments.paper_experiments()] == [
-        'task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded']
+        'task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded',
+        'task2-seeded']
 
 
 def test_each_module_builds_the_experiment_registered_under_its_name():

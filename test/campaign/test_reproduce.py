@@ -79,7 +79,8 @@ def test_configurations_pin_their_algorithm_and_preset(name):
 
 def test_all_runs_the_papers_experiments_and_levers_set_their_options():
     names = [experiment.name for experiment in experiments.paper_experiments()]
-    assert names == ['task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded']
+    assert names == ['task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task1-seeded',
+                     'task2-seeded']
     levers = experiments.EXPERIMENTS['levers-task5']
     assert levers.beyond_paper
     by_key = {configuration.key: configuration for configuration in levers.configurations}

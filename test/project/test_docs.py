@@ -92,8 +92,8 @@ def test_every_experiment_page_is_in_the_index():
     index = (ROOT / 'docs' / 'results' / 'README.md').read_text(encoding='utf-8')
     results = RESULTS.read_text(encoding='utf-8')
     for name in ('task5-joint-limits', 'task6-rotation', 'task4-hierarchy', 'task4-structures',
-                 'task1-seeded', 'task3-levers', 'fixed-hand', 'levers-task5', 'levers-task6',
-                 'engines'):
+                 'task1-seeded', 'task2-seeded', 'task3-levers', 'fixed-hand', 'levers-task5',
+                 'levers-task6', 'engines'):
         assert f'({name}/README.md)' in index, name
         assert f'(results/{name}/README.md)' in results, name
 

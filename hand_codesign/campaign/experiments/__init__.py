@@ -3,7 +3,8 @@ The experiments `hand-codesign reproduce` runs, one module each, registered by n
 
 Each module adds its Experiment to the registry (hand_codesign.campaign.registry); this face
 imports them in the order `reproduce --list` shows and `reproduce all` runs the paper's:
-Tasks 5 and 6 (joint limits found), Task 4's hierarchy (Fig. 3), Task 1 seeded (Fig. 2), then
+Tasks 5 and 6 (joint limits found), Task 4's hierarchy (Fig. 3), Task 1 seeded (Fig. 2), Task 2
+seeded, then
 the experiments `all` leaves out: Task 4's structures one at a time, Task 3's levers, the
 levers of Tasks 5 and 6. A new
 experiment is a new module, imported below; a new lever is a change to one experiment's module.
@@ -15,6 +16,7 @@ from hand_codesign.campaign.experiment import Experiment
 from hand_codesign.campaign.experiments import levers_task5
 from hand_codesign.campaign.experiments import levers_task6
 from hand_codesign.campaign.experiments import task1_seeded
+from hand_codesign.campaign.experiments import task2_seeded
 from hand_codesign.campaign.experiments import task3_levers
 from hand_codesign.campaign.experiments import task4_hierarchy
 from hand_codesign.campaign.experiments import task4_structures
@@ -23,8 +25,8 @@ from hand_codesign.campaign.experiments import task6_rotation
 from hand_codesign.campaign.registry import added
 
 # imported for what they register, in this order (the order of `reproduce --list`)
-MODULES = (task5_joint_limits, task6_rotation, task4_hierarchy, task1_seeded, task4_structures,
-           task3_levers, levers_task5, levers_task6)
+MODULES = (task5_joint_limits, task6_rotation, task4_hierarchy, task1_seeded, task2_seeded,
+           task4_structures, task3_levers, levers_task5, levers_task6)
 EXPERIMENTS: Dict[str, Experiment] = {
     experiment.name: experiment
     for experiment in (added()[module.__name__] for module in MODULES)}
