@@ -21,11 +21,12 @@ DIR receives:
   initial joint angles), `design` (hand and controller in physical units, in the format of a
   task's `seed_design`, so it can seed a new search), `task` (the task file's text and the
   run's seed, budget, world states and structure), `recorded` (the run's objectives of this
-  design and its normalized genome) and where it came from.
+  design, the version of the task they were measured on: a sub-problem of growing horizon, a
+  stage; and its normalized genome) and where it came from.
 
 `load_export(DIR)` reads the folder back into an `Export`, and `resimulate(export)` evaluates
-its design on its task; the command does that right away and says whether the objectives are
-the recorded ones (floats are written with their exact shortest repr, so they round-trip).
+its design on its task; the command does that right away, on the version of the task the run
+recorded the objectives on, and says whether they are the recorded ones (floats are written with their exact shortest repr, so they round-trip).
 """
 
 import dataclasses
@@ -66,14 +67,15 @@ def export_command(arguments):
     print(f'exported candidate {design.candidate_id} of generation {design.generation} '
           f'(structure {list(design.structure)}): {paths[0]}, {paths[1]}')
     exported = load_export(out)
-    evaluation = resimulate(exported)
+    evaluation = resimulate(exported, as_recorded=exported.objectives is not None)
     if exported.objectives is None:
         print('the bag holds no evaluation of this design; re-simulated objectives: '
               + _objective_text(exported.objective_names, evaluation.objectives))
         return 0
     same = np.array_equal(evaluation.objectives, exported.objectives)
     if same:
-        print('re-simulating the exported files gives the recorded objectives: '
+        print('re-simulating the exported files gives the recorded objectives'
+              + _sub_problem_text(design) + ': '
               + _objective_text(exported.objective_names, evaluation.objectives))
         return 0
     print('EXPORT MISMATCH: re-simulating the exported files gives '
@@ -81,6 +83,12 @@ def export_command(arguments):
           + ', the run recorded '
           + _objective_text(exported.objective_names, exported.objectives))
     return 1
+
+
+def _sub_problem_text(recorded):
+    if recorded.horizon:
+        return f' (on the sub-problem up to {recorded.horizon:g} s they were recorded on)'
+    return ''
 
 
 def _objective_text(names, values):
@@ -152,6 +160,12 @@ class _Literal(str):
     """A string dumped as a YAML block literal (the task file stays readable)."""
 
 
+def sub_problem_document(variant):
+    """Return a Variant's coordinates besides its structure and worlds as plain YAML data."""
+    return {'horizon': float(variant.horizon), 'stage': int(variant.stage),
+            'held_out': bool(variant.held_out), 'world_draw': int(variant.world_draw)}
+
+
 def _literal(dumper, text):
     return dumper.represent_scalar('tag:yaml.org,2002:str', text, style='|')
 
@@ -192,6 +206,9 @@ def export_design(record, recorded, out):
                            dict(zip(recorded.objective_names, _floats(recorded.objectives)))),
             'fitness': None if recorded.fitness is None else float(recorded.fitness),
             'genome': dict(zip(recorded.genome_names, _floats(recorded.x))),
+            # the version of the task they were measured on: a sub-problem of growing horizon
+            # (s, 0 the whole motion), a stage of a two-stage task, a draw of the worlds
+            'evaluated_on': sub_problem_document(recorded.variant),
         },
     }
     try:
@@ -222,13 +239,14 @@ class Export:
     """An exported design read back: its task, Design and what the run recorded."""
 
     path: pathlib.Path
-    task: object
+    task: object                # the run's task, whole motions
     design: Design
     urdf_path: pathlib.Path
     objective_names: list
     objectives: np.ndarray      # None when the run recorded none
     fitness: float
     document: dict
+    recorded_task: object = None  # the version of it the objectives were recorded on
 
 
 class _Fields:
@@ -298,15 +316,31 @@ def load_export(folder):
         values = np.array([fields.number(fields.get(objectives, name, 'recorded.objectives'),
                                          f'recorded.objectives.{name}') for name in names])
     fitness = recorded.get('fitness')
-    return Export(path=path, task=task, design=design,
+    evaluated_on = fields.mapping(recorded.get('evaluated_on') or {}, 'recorded.evaluated_on')
+    try:
+        sub_problem = Variant(horizon=float(evaluated_on.get('horizon', 0.0)),
+                              stage=int(evaluated_on.get('stage', 0)),
+                              held_out=bool(evaluated_on.get('held_out', False)),
+                              world_draw=int(evaluated_on.get('world_draw', 0)))
+    except (TypeError, ValueError):
+        fields.fail('recorded.evaluated_on', 'numbers horizon (s), stage, world_draw and a '
+                                             f'boolean held_out, got {evaluated_on!r}')
+    return Export(path=path, task=task, design=design, recorded_task=task.replace(
+                      **sub_problem.task_changes()),
                   urdf_path=path.parent / str(document.get('urdf', URDF_NAME)),
                   objective_names=names, objectives=values,
                   fitness=None if fitness is None else float(fitness), document=document)
 
 
-def resimulate(exported, worlds=None):
-    """Return the core Evaluation of an Export's design on its task (default: its worlds)."""
+def resimulate(exported, worlds=None, as_recorded=False):
+    """
+    Return the core Evaluation of an Export's design on its task (default: its worlds).
+
+    as_recorded: on the version of the task the run recorded its objectives on (a sub-problem
+    of growing horizon, a stage), to compare with them; else on the task's whole motions.
+    """
+    task = exported.recorded_task if as_recorded else exported.task
     try:
-        return evaluate_design(exported.design, exported.task, worlds)
+        return evaluate_design(exported.design, task, worlds)
     except ValueError as error:
         raise UserError(f'{exported.path}: the design cannot be simulated: {error}') from None

@@ -9,6 +9,8 @@ from analysis_run import run_cli
 from bag_samples import interleaved
 from bag_samples import sample_messages
 from hand_codesign.analysis import records
+from hand_codesign.analysis.export import load_export
+from hand_codesign.analysis.export import resimulate
 from hand_codesign.analysis.resume import resume_point
 from hand_codesign.bag.writer import message_definition
 from hand_codesign.cli import main
@@ -202,6 +204,16 @@ def test_a_horizon_run_is_recorded_replayed_and_resumed(tmp_path, capsys):
                  str(tmp_path / 'best.gif')]) == 0
     printed = capsys.readouterr().out
     assert f'horizon {rebuilt.horizons[3]:g} s' in printed and 'bit for bit' in printed
+
+    # exported, the best design re-simulates to its recorded objectives on its sub-problem,
+    # while its whole rollout (the export's task) is another evaluation
+    assert main(['export', str(bag), '--out', str(tmp_path / 'export')]) == 0
+    printed = capsys.readouterr().out
+    assert 'gives the recorded objectives (on the sub-problem up to' in printed
+    exported = load_export(tmp_path / 'export')
+    assert exported.recorded_task.variant.horizon > 0 and not exported.task.variant.horizon
+    assert np.array_equal(resimulate(exported, as_recorded=True).objectives,
+                          exported.objectives)
 
     # resumed in the middle of generation 3, the search continues on that generation's horizon
     third = [m.candidate_id for m in decoded_messages(mcap, topics.EVALUATIONS)
