@@ -26,7 +26,8 @@ DIR receives:
 
 `load_export(DIR)` reads the folder back into an `Export`, and `resimulate(export)` evaluates
 its design on its task; the command does that right away, on the version of the task the run
-recorded the objectives on, and says whether they are the recorded ones (floats are written with their exact shortest repr, so they round-trip).
+recorded the objectives on, and says whether they are the recorded ones (floats are written
+with their exact shortest repr, so they round-trip).
 """
 
 import dataclasses
