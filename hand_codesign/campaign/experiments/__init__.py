@@ -4,10 +4,9 @@ The experiments `hand-codesign reproduce` runs, one module each, registered by n
 Each module adds its Experiment to the registry (hand_codesign.campaign.registry); this face
 imports them in the order `reproduce --list` shows and `reproduce all` runs the paper's:
 Tasks 5 and 6 (joint limits found), Task 4's hierarchy (Fig. 3), Task 1 seeded (Fig. 2), Task 2
-seeded, then
-the experiments `all` leaves out: Task 4's structures one at a time, Task 3's levers, the
-levers of Tasks 5 and 6. A new
-experiment is a new module, imported below; a new lever is a change to one experiment's module.
+seeded, then the experiments `all` leaves out: Task 4's structures one at a time, Task 3's
+levers, the levers of Tasks 5 and 6. A new experiment is a new module, imported below; a new
+lever is a change to one experiment's module.
 """
 
 from typing import Dict, List
