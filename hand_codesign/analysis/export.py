@@ -161,7 +161,7 @@ class _Literal(str):
     """A string dumped as a YAML block literal (the task file stays readable)."""
 
 
-def sub_problem_document(variant):
+def _sub_problem_document(variant):
     """Return a Variant's coordinates besides its structure and worlds as plain YAML data."""
     return {'horizon': float(variant.horizon), 'stage': int(variant.stage),
             'held_out': bool(variant.held_out), 'world_draw': int(variant.world_draw)}
@@ -209,7 +209,7 @@ def export_design(record, recorded, out):
             'genome': dict(zip(recorded.genome_names, _floats(recorded.x))),
             # the version of the task they were measured on: a sub-problem of growing horizon
             # (s, 0 the whole motion), a stage of a two-stage task, a draw of the worlds
-            'evaluated_on': sub_problem_document(recorded.variant),
+            'evaluated_on': _sub_problem_document(recorded.variant),
         },
     }
     try:
@@ -241,13 +241,13 @@ class Export:
 
     path: pathlib.Path
     task: object                # the run's task, whole motions
+    recorded_task: object       # the version of it the objectives were recorded on
     design: Design
     urdf_path: pathlib.Path
     objective_names: list
     objectives: np.ndarray      # None when the run recorded none
     fitness: float
     document: dict
-    recorded_task: object = None  # the version of it the objectives were recorded on
 
 
 class _Fields:
