@@ -1,0 +1,182 @@
+"""
+Replay a campaign's design from its result file: what the hand does, world by world.
+
+A campaign commits each run's result (`result-KEY-seedN.json`: the best design by gene name)
+and the task it ran (`tasks/KEY.yaml`), not its bag. This re-simulates that design in the
+nominal world or an unseen one (PyBullet) and prints, every `--every` seconds: where the object is, its turn
+about the vertical since the start (its heading in the plane), which of the hand's links touch it (finger.joint, -1 the
+palm) and which joints rest on a limit; then its final errors, and optionally a strip of
+frames of the rollout.
+
+Usage (from the repository's root):
+    python docs/results/task3-levers/replay_result.py TASK.yaml RESULT.json \
+        [--every 0.1] [--world K] [--unseen 100] [--picture OUT.png --times 0 0.5 1 2]
+"""
+
+import argparse
+import json
+
+from hand_codesign.core.evaluate import evaluate_design
+from hand_codesign.core.experiments.measures import unseen_world_states
+from hand_codesign.core.sim.worlds import WorldState
+from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task.reader import load_task
+import numpy as np
+
+WORLD_QUANTITIES = ('position_x', 'position_y', 'position_z', 'orientation_delta',
+                    'friction_delta', 'scale', 'mass_factor')
+
+# a joint within this of a limit (rad) rests on it
+ON_LIMIT = 0.02
+
+
+def recorded_design(task, result):
+    """Return the Design of a result file's {gene name: value} on the task it ran."""
+    spec = genome_spec(task)
+    return spec.decode(spec.encode(result['design']))
+
+
+def joint_names(design):
+    """Return 'finger.joint' for every joint, in the simulator's joint order."""
+    return [f'{f}.{j}' for f, finger in enumerate(design.hand.fingers)
+            for j in range(len(finger.joints))]
+
+
+def resting_on_limits(design, angles):
+    """Return the names of the joints within ON_LIMIT of one of their limits."""
+    joints = [joint for finger in design.hand.fingers for joint in finger.joints]
+    return [name for name, joint, angle in zip(joint_names(design), joints, angles)
+            if joint.lower_limit is not None
+            and min(abs(angle - joint.lower_limit), abs(angle - joint.upper_limit)) < ON_LIMIT]
+
+
+def body_axes(orientation):
+    """Return the object's own x, y and z axes in the world frame (rows), of (x, y, z, w)."""
+    x, y, z, w = orientation
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)],
+                     [2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w)],
+                     [2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def yaw(orientation, axis):
+    """Return the heading (rad) in the plane of the object's own axis `axis` (0, 1 or 2)."""
+    direction = body_axes(orientation)[axis]
+    return float(np.arctan2(direction[1], direction[0]))
+
+
+def trace(task, design, every, world):
+    """Return the evaluation and rows (t, position, turn since start, touching, on limits)."""
+    names = joint_names(design)
+    rows, start = [], []
+
+    def on_frame(step, simulator):
+        position, orientation = simulator.object_pose()
+        if not start:  # the object's own axis that lies flattest at the start gives its heading
+            start.append(int(np.argmin(np.abs(body_axes(orientation)[:, 2]))))
+            start.append(yaw(orientation, start[0]))
+        turn = yaw(orientation, start[0]) - start[1]
+        touching = sorted(simulator.touching_links(1e-3))
+        rows.append((step * task.time_step, position, float(np.angle(np.exp(1j * turn))),
+                     ['palm' if link < 0 else names[link] for link in touching],
+                     resting_on_limits(design, simulator.joint_angles())))
+    steps = max(1, int(round(every / task.time_step)))
+    evaluation = evaluate_design(design, task, [world], on_frame=on_frame, frame_every=steps)
+    return evaluation, rows
+
+
+def unseen_turns(task, design, count):
+    """
+    Return (worlds, turns, touched) on `count` unseen worlds of the task's ranges.
+
+    turns: (count,) rad, the object's heading at the end less at the start (as `trace`);
+    touched: (count,) bool, a link of a finger (not the palm) touched it at some frame.
+    """
+    worlds = unseen_world_states(task, count)
+    start, touched, current = {}, np.zeros(count, dtype=bool), [0]
+
+    def on_world(index, simulator):
+        current[0] = index
+
+    def on_frame(step, simulator):
+        index = current[0]
+        if index not in start:
+            orientation = simulator.object_pose()[1]
+            axis = int(np.argmin(np.abs(body_axes(orientation)[:, 2])))
+            start[index] = (axis, yaw(orientation, axis))
+        touched[index] |= any(link >= 0 for link in simulator.touching_links(1e-3))
+    evaluation = evaluate_design(design, task, worlds, on_world=on_world, on_frame=on_frame,
+                                 frame_every=max(1, int(round(0.05 / task.time_step))))
+    turns = np.array([np.angle(np.exp(1j * (yaw(pose[3:], start[i][0]) - start[i][1])))
+                      if i in start else np.nan
+                      for i, pose in enumerate(evaluation.final_poses)])
+    return worlds, turns, touched
+
+
+def spearman(a, b):
+    """Return the rank correlation of two samples (no ties expected)."""
+    ranks = [np.argsort(np.argsort(values)) for values in (a, b)]
+    return float(np.corrcoef(*ranks)[0, 1])
+
+
+def picture(task, design, world, path, times, view=(20, -70), distance=0.3):
+    """Write a strip of frames of one world's rollout at `times` (s) to path."""
+    from hand_codesign.analysis.replay import FrameGrabber, frame_every, FRAMES_PER_SECOND
+    from hand_codesign.core.sim.pybullet_sim import Simulator
+    from PIL import Image
+    grabber = FrameGrabber(task, view)
+    grabber.distance = distance  # m: the whole capsule and hand in view
+    with Simulator(rendering=True) as simulator:
+        evaluate_design(design, task, [world], simulator=simulator,
+                        on_frame=grabber, frame_every=frame_every(task))
+    frames = grabber.frames
+    picks = [frames[min(len(frames) - 1, int(round(t * FRAMES_PER_SECOND)))] for t in times]
+    Image.fromarray(np.concatenate(picks, axis=1)).save(path)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
+    parser.add_argument('task')
+    parser.add_argument('result')
+    parser.add_argument('--every', type=float, default=0.1, help='seconds between rows')
+    parser.add_argument('--world', type=int,
+                        help='trace unseen world K (0-based) instead of the nominal one')
+    parser.add_argument('--unseen', type=int, default=0,
+                        help='also measure the turn on this many unseen worlds')
+    parser.add_argument('--picture', help='write a strip of frames of the rollout here')
+    parser.add_argument('--times', type=float, nargs='+', default=[0.0, 0.5, 1.0, 2.0])
+    arguments = parser.parse_args()
+    task = load_task(arguments.task).replace(early_termination=None)
+    with open(arguments.result, encoding='utf-8') as file:
+        result = json.load(file)
+    design = recorded_design(task, result)
+    for finger, values in enumerate(design.hand.fingers):
+        print(f'finger {finger} at {np.round(values.position, 3).tolist()}, segments '
+              f'{np.round(values.segment_lengths, 3).tolist()} m, joints '
+              + '; '.join(f'axis {joint.axis_angle:+.2f} start {joint.initial_angle:+.2f} '
+                          f'limits [{joint.lower_limit:+.2f}, {joint.upper_limit:+.2f}]'
+                          for joint in values.joints))
+    world = (WorldState.nominal() if arguments.world is None
+             else unseen_world_states(task, arguments.world + 1)[arguments.world])
+    evaluation, rows = trace(task, design, arguments.every, world)
+    for t, position, turn, touching, limits in rows:
+        print(f't {t:4.2f}  object {np.round(position, 3).tolist()}  turned {turn:+.3f} rad  '
+              f'touching {touching or "-"}  on a limit {limits or "-"}')
+    print('final errors (m, rad):', np.round(evaluation.final_errors[0], 4).tolist(),
+          'start collision' if evaluation.collision else '')
+    if arguments.unseen:
+        worlds, turns, touched = unseen_turns(task, design, arguments.unseen)
+        print(f'{arguments.unseen} unseen worlds: turn median {np.nanmedian(turns):+.3f} rad, '
+              f'p10 {np.nanpercentile(turns, 10):+.3f}, p90 {np.nanpercentile(turns, 90):+.3f}; '
+              f'a finger touched it in {np.mean(touched):.0%}')
+        values = np.array([[*w.position_delta, w.orientation_delta, w.friction_delta, w.scale,
+                            w.mass_factor] for w in worlds])
+        print('rank correlation of the turn with each randomized quantity: ' + ', '.join(
+            f'{name} {spearman(values[:, i], turns):+.2f}'
+            for i, name in enumerate(WORLD_QUANTITIES) if np.ptp(values[:, i]) > 0))
+    if arguments.picture:
+        picture(task, design, world, arguments.picture, arguments.times)
+        print('picture', arguments.picture, 'at', arguments.times, 's')
+
+
+if __name__ == '__main__':
+    main()
