@@ -15,11 +15,13 @@ Usage (from the repository's root):
 
 import argparse
 import json
+import sys
 
 from hand_codesign.core.evaluate import evaluate_design
 from hand_codesign.core.experiments.measures import unseen_world_states
 from hand_codesign.core.sim.worlds import WorldState
 from hand_codesign.core.task.genome import genome_spec
+from hand_codesign.core.task import TaskError
 from hand_codesign.core.task.reader import load_task
 import numpy as np
 
@@ -135,8 +137,8 @@ def picture(task, design, world, path, times, view=(20, -70), distance=0.3):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument('task')
-    parser.add_argument('result')
+    parser.add_argument('task', help='the task file the campaign ran (its tasks/KEY.yaml)')
+    parser.add_argument('result', help="the run's result file (result-KEY-seedN.json)")
     parser.add_argument('--every', type=float, default=0.1, help='seconds between rows')
     parser.add_argument('--world', type=int,
                         help='trace unseen world K (0-based) instead of the nominal one')
@@ -145,16 +147,15 @@ def main():
     parser.add_argument('--picture', help='write a strip of frames of the rollout here')
     parser.add_argument('--times', type=float, nargs='+', default=[0.0, 0.5, 1.0, 2.0])
     arguments = parser.parse_args()
-    task = load_task(arguments.task).replace(early_termination=None)
-    with open(arguments.result, encoding='utf-8') as file:
-        result = json.load(file)
-    design = recorded_design(task, result)
-    for finger, values in enumerate(design.hand.fingers):
-        print(f'finger {finger} at {np.round(values.position, 3).tolist()}, segments '
-              f'{np.round(values.segment_lengths, 3).tolist()} m, joints '
-              + '; '.join(f'axis {joint.axis_angle:+.2f} start {joint.initial_angle:+.2f} '
-                          f'limits [{joint.lower_limit:+.2f}, {joint.upper_limit:+.2f}]'
-                          for joint in values.joints))
+    if arguments.world is not None and arguments.world < 0:
+        parser.error(f'--world: expected a world index >= 0, got {arguments.world}')
+    try:
+        task = load_task(arguments.task).replace(early_termination=None)
+        design = recorded_design(task, read_result(arguments.result))
+    except (TaskError, OSError, ValueError) as error:
+        print(f'replay_result: {error}', file=sys.stderr)
+        return 2
+    describe(design)
     world = (WorldState.nominal() if arguments.world is None
              else unseen_world_states(task, arguments.world + 1)[arguments.world])
     evaluation, rows = trace(task, design, arguments.every, world)
@@ -164,19 +165,47 @@ def main():
     print('final errors (m, rad):', np.round(evaluation.final_errors[0], 4).tolist(),
           'start collision' if evaluation.collision else '')
     if arguments.unseen:
-        worlds, turns, touched = unseen_turns(task, design, arguments.unseen)
-        print(f'{arguments.unseen} unseen worlds: turn median {np.nanmedian(turns):+.3f} rad, '
-              f'p10 {np.nanpercentile(turns, 10):+.3f}, p90 {np.nanpercentile(turns, 90):+.3f}; '
-              f'a finger touched it in {np.mean(touched):.0%}')
-        values = np.array([[*w.position_delta, w.orientation_delta, w.friction_delta, w.scale,
-                            w.mass_factor] for w in worlds])
-        print('rank correlation of the turn with each randomized quantity: ' + ', '.join(
-            f'{name} {spearman(values[:, i], turns):+.2f}'
-            for i, name in enumerate(WORLD_QUANTITIES) if np.ptp(values[:, i]) > 0))
+        report_unseen(task, design, arguments.unseen)
     if arguments.picture:
         picture(task, design, world, arguments.picture, arguments.times)
         print('picture', arguments.picture, 'at', arguments.times, 's')
+    return 0
+
+
+def read_result(path):
+    """Return a result file's contents; ValueError naming it when it holds no design."""
+    with open(path, encoding='utf-8') as file:
+        try:
+            result = json.load(file)
+        except json.JSONDecodeError as error:
+            raise ValueError(f'{path}: not JSON ({error})') from None
+    if not isinstance(result, dict) or not isinstance(result.get('design'), dict):
+        raise ValueError(f'{path}: expected a result file with a "design" mapping')
+    return result
+
+
+def describe(design):
+    """Print each finger's place, segments and joints."""
+    for finger, values in enumerate(design.hand.fingers):
+        print(f'finger {finger} at {np.round(values.position, 3).tolist()}, segments '
+              f'{np.round(values.segment_lengths, 3).tolist()} m, joints '
+              + '; '.join(f'axis {joint.axis_angle:+.2f} start {joint.initial_angle:+.2f} '
+                          f'limits [{joint.lower_limit:+.2f}, {joint.upper_limit:+.2f}]'
+                          for joint in values.joints))
+
+
+def report_unseen(task, design, count):
+    """Print the turn on `count` unseen worlds and its rank correlation with each quantity."""
+    worlds, turns, touched = unseen_turns(task, design, count)
+    print(f'{count} unseen worlds: turn median {np.nanmedian(turns):+.3f} rad, '
+          f'p10 {np.nanpercentile(turns, 10):+.3f}, p90 {np.nanpercentile(turns, 90):+.3f}; '
+          f'a finger touched it in {np.mean(touched):.0%}')
+    values = np.array([[*w.position_delta, w.orientation_delta, w.friction_delta, w.scale,
+                        w.mass_factor] for w in worlds])
+    print('rank correlation of the turn with each randomized quantity: ' + ', '.join(
+        f'{name} {spearman(values[:, i], turns):+.2f}'
+        for i, name in enumerate(WORLD_QUANTITIES) if np.ptp(values[:, i]) > 0))
 
 
 if __name__ == '__main__':
-    main()
+    sys.exit(main())
