@@ -18,12 +18,14 @@ import json
 import sys
 
 from hand_codesign.core.evaluate import evaluate_design
+from hand_codesign.core.rotations import rotation_matrix
 from hand_codesign.core.experiments.measures import unseen_world_states
 from hand_codesign.core.sim.worlds import WorldState
 from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.core.task import TaskError
 from hand_codesign.core.task.reader import load_task
 import numpy as np
+from scipy.stats import spearmanr
 
 WORLD_QUANTITIES = ('position_x', 'position_y', 'position_z', 'orientation_delta',
                     'friction_delta', 'scale', 'mass_factor')
@@ -54,10 +56,7 @@ def resting_on_limits(design, angles):
 
 def body_axes(orientation):
     """Return the object's own x, y and z axes in the world frame (rows), of (x, y, z, w)."""
-    x, y, z, w = orientation
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)],
-                     [2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w)],
-                     [2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y)]])
+    return rotation_matrix(orientation).T
 
 
 def yaw(orientation, axis):
@@ -112,12 +111,6 @@ def unseen_turns(task, design, count):
                       if i in start else np.nan
                       for i, pose in enumerate(evaluation.final_poses)])
     return worlds, turns, touched
-
-
-def spearman(a, b):
-    """Return the rank correlation of two samples (no ties expected)."""
-    ranks = [np.argsort(np.argsort(values)) for values in (a, b)]
-    return float(np.corrcoef(*ranks)[0, 1])
 
 
 def picture(task, design, world, path, times, view=(20, -70), distance=0.3):
@@ -203,7 +196,7 @@ def report_unseen(task, design, count):
     values = np.array([[*w.position_delta, w.orientation_delta, w.friction_delta, w.scale,
                         w.mass_factor] for w in worlds])
     print('rank correlation of the turn with each randomized quantity: ' + ', '.join(
-        f'{name} {spearman(values[:, i], turns):+.2f}'
+        f'{name} {spearmanr(values[:, i], turns, nan_policy="omit")[0]:+.2f}'
         for i, name in enumerate(WORLD_QUANTITIES) if np.ptp(values[:, i]) > 0))
 
 
