@@ -20,7 +20,7 @@ A candidate's sub-problem (Candidate.horizon) is part of its task: task.replace(
 
 When the task's quality-diversity archive names outcome descriptors (core.outcomes), each
 world's scene is also read once at the end of its rollout and the Evaluation carries their
-shares of the worlds (`outcome_names`, `outcomes`); a design that starts in collision has
+means over the worlds (`outcome_names`, `outcomes`); a design that starts in collision has
 0 for each. Other tasks read nothing more.
 
 A task in several physics engines (`physics: {engines: [pybullet, mujoco]}`) evaluates each
@@ -290,7 +290,8 @@ def _evaluate_in(simulator, design, task, worlds, on_frame, frame_every, on_worl
     kind = task.object_spec.shape
     objects = [(state, simulator.object_shape(state, kind)) for state in every_state]
     num_objectives = schedule.num_objectives
-    watch = OutcomeWatch(context.outcome_names, len(states))
+    watch = OutcomeWatch(context.outcome_names, len(states),
+                         [state.orientation for state in states])
     if simulator.start_collisions(objects):
         world_values = np.full((len(states), num_objectives), COLLISION_PENALTY)
         starts = np.array([(*state.position, *state.orientation) for state in states],

@@ -1,5 +1,5 @@
 """
-Outcome descriptors: what a design did at the end of its rollouts, as shares of the worlds.
+Outcome descriptors: what a design did at the end of its rollouts, averaged over the worlds.
 
 A quality-diversity archive (core.search.quality_diversity) may span outcome descriptors besides
 those of the morphology (core.task.descriptors). They are measured in the very rollouts
@@ -12,11 +12,14 @@ object is removed; nothing in the scene changes, so the objectives stay bit-iden
                 and the same finger touches the object (a contact point between any segment
                 of that finger and the object with a separation of at most CONTACT_DISTANCE)
     touch       the share of the worlds in which any finger touches the object
+    turn        the mean over the worlds of the object's turn about the vertical from its start
+                pose, as a share of half a turn (|angle| / pi, the angle in [-pi, pi]): a
+                capsule turned by 90 degrees either way counts 0.5
 
-A world the design starts in collision with is not simulated and counts as neither; so does
-a world whose simulation became unstable (its scene is not a resting state). Both are shares
-of all the candidate's worlds, in [0, 1]. core.experiments.measures applies the same rule on unseen
-worlds (`resting_on_limit_touching`).
+A world the design starts in collision with is not simulated and counts as none of them (0);
+so does a world whose simulation became unstable (its scene is not a resting state). All are
+means over all the candidate's worlds, in [0, 1]. core.experiments.measures applies the same
+rule on unseen worlds (`resting_on_limit_touching`).
 
 They are computed only when the task's `optimizer.archive.descriptors` names one
 (`task_outcomes`): every other evaluation pays nothing. They travel in the Evaluation message
@@ -24,14 +27,16 @@ They are computed only when the task's `optimizer.archive.descriptors` names one
 """
 
 import dataclasses
+import math
 from typing import Tuple
 
+from hand_codesign.core.rotations import vertical_turn
 import numpy as np
 
 LIMIT_TOLERANCE = 0.02  # rad: a joint this close to a limit (or past it) rests on it
 CONTACT_DISTANCE = 0.001  # m: a contact point this close (or penetrating) is a touch
-OUTCOME_NAMES = ('limit_rest', 'touch')
-OUTCOME_RANGE = (0.0, 1.0)  # every outcome descriptor is a share of the worlds
+OUTCOME_NAMES = ('limit_rest', 'touch', 'turn')
+OUTCOME_RANGE = (0.0, 1.0)  # each outcome descriptor: a mean over the worlds of values in [0, 1]
 
 
 def task_outcomes(task):
@@ -109,33 +114,47 @@ def reached_its_limit(link, angle):
             or (at_upper and not start >= link.upper_limit - LIMIT_TOLERANCE))
 
 
-_RULES = {'limit_rest': resting_on_limit_touching,
-          'touch': lambda simulator: bool(touching_links(simulator))}
+def turn_share(simulator, start):
+    """Return the object's turn about the vertical from `start` as a share of half a turn."""
+    return abs(vertical_turn(start, simulator.object_pose()[1])) / math.pi
+
+
+_RULES = {'limit_rest': lambda simulator, start: float(resting_on_limit_touching(simulator)),
+          'touch': lambda simulator, start: float(bool(touching_links(simulator))),
+          'turn': turn_share}
 
 
 class OutcomeWatch:
-    """Per world, whether each named outcome holds at the end of its rollout."""
+    """Per world, the value of each named outcome at the end of its rollout."""
 
-    def __init__(self, names, worlds):
+    def __init__(self, names, worlds, starts=None):
+        """
+        Watch `worlds` rollouts for the outcomes `names` (of OUTCOME_NAMES).
+
+        `starts` holds each world's start orientation of the object, quaternions (x, y, z, w),
+        shape (worlds, 4); only `turn` reads it.
+        """
         self.names = tuple(names)
-        self.flags = np.zeros((worlds, len(self.names)), dtype=bool)
+        self.values = np.zeros((worlds, len(self.names)))
+        self.starts = starts
 
     def on_end(self, index):
         """Return the Simulator.rollout `on_end` of world `index`, or None without outcomes."""
         if not self.names:
             return None
+        start = None if self.starts is None else self.starts[index]
 
         def read(simulator, rollout):
-            # an unstable world's scene is no resting state: it counts as neither
+            # an unstable world's scene is no resting state: it counts as none (0)
             if not rollout.unstable:
-                self.flags[index] = [_RULES[name](simulator) for name in self.names]
+                self.values[index] = [_RULES[name](simulator, start) for name in self.names]
         return read
 
     def shares(self):
-        """Return the share of the worlds in which each outcome held."""
-        if not len(self.flags):
+        """Return the mean over the worlds of each outcome (a share, for the yes-or-no ones)."""
+        if not len(self.values):
             return np.zeros(len(self.names))
-        return self.flags.mean(axis=0)
+        return self.values.mean(axis=0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -173,4 +192,4 @@ __all__ = ['Answer', 'CONTACT_DISTANCE', 'LIMIT_TOLERANCE', 'OUTCOME_NAMES', 'OU
            'OutcomeWatch', 'fingers', 'limit_rests', 'objectives_of', 'on_its_limit',
            'outcomes_of',
            'reached_its_limit', 'resting_on_limit_touching',
-           'resting_on_reached_limit_touching', 'task_outcomes', 'touching_links']
+           'resting_on_reached_limit_touching', 'task_outcomes', 'touching_links', 'turn_share']

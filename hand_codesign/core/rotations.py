@@ -34,6 +34,17 @@ def quaternion_conjugate(quaternion):
     return (-x, -y, -z, w)
 
 
+def vertical_turn(start, end):
+    """
+    Return the turn (rad, in [-pi, pi]) about the vertical from orientation start to end.
+
+    Both are quaternions (x, y, z, w) in the world frame; the turn is the twist about the
+    world's z axis of the rotation that takes start to end (its swing, a tilt, is left out).
+    """
+    x, y, z, w = quaternion_multiply(end, quaternion_conjugate(start))
+    return float(np.angle(np.exp(2j * math.atan2(z, w))))
+
+
 def rotation_matrix(quaternion):
     """Return the 3 x 3 rotation matrix of a unit quaternion (x, y, z, w)."""
     x, y, z, w = quaternion

@@ -5,8 +5,9 @@ import dataclasses
 from hand_codesign.core.evaluate import evaluate, evaluate_design
 from hand_codesign.core.experiments.measures import frame_interval, measure_worlds
 from hand_codesign.core.outcomes import Answer, CONTACT_DISTANCE, OutcomeWatch, task_outcomes
+from hand_codesign.core.rotations import axis_angle_quaternion, quaternion_multiply, vertical_turn
 from hand_codesign.core.sim.objectives import goal_schedule
-from hand_codesign.core.sim.worlds import world_states
+from hand_codesign.core.sim.worlds import object_state, world_states
 from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.core.task.parts import ArchiveSpec
 import numpy as np
@@ -89,6 +90,33 @@ def test_a_design_starting_in_collision_has_no_outcome(outcome_task, design):  #
     straight = with_fingers(design, lengths=(0.09, 0.09), angle=0.0)  # reaches below z = 0
     evaluation = evaluate_design(straight, outcome_task)
     assert evaluation.collision and evaluation.outcomes.tolist() == [0.0, 0.0]
+
+
+def test_vertical_turn_is_the_twist_about_z_whatever_the_tilt():
+    tilt = axis_angle_quaternion((1.0, 0.0, 0.0), 0.4)
+    start = axis_angle_quaternion((0.0, 1.0, 0.0), 0.3)
+    for angle in (0.0, 0.7, -1.2, 3.0):
+        yaw = axis_angle_quaternion((0.0, 0.0, 1.0), angle)
+        assert vertical_turn(start, quaternion_multiply(yaw, start)) == pytest.approx(angle)
+    assert vertical_turn(start, quaternion_multiply(tilt, start)) == pytest.approx(0.0)
+    # three quarters of a turn one way is a quarter the other way
+    yaw = axis_angle_quaternion((0.0, 0.0, 1.0), 1.5 * np.pi)
+    assert vertical_turn(start, quaternion_multiply(yaw, start)) == pytest.approx(-np.pi / 2)
+
+
+def test_the_turn_outcome_is_the_mean_turn_of_the_final_poses(task, design):  # noqa: F811
+    turning = task.replace(algorithm='cma-mae',
+                           archive=ArchiveSpec(descriptors=('turn', 'finger_length')))
+    assert task_outcomes(turning) == ('turn',)
+    evaluation = evaluate_design(design, turning)
+    assert not evaluation.collision and evaluation.unstable_worlds == 0
+    starts = [object_state(turning, world).orientation for world in world_states(turning)]
+    turns = [abs(vertical_turn(start, pose[3:])) / np.pi
+             for start, pose in zip(starts, evaluation.final_poses)]
+    assert evaluation.outcomes[0] == pytest.approx(np.mean(turns), abs=1e-9)
+    assert 0 < evaluation.outcomes[0] < 1  # the design pushes the box: it turns a little
+    plain = evaluate_design(design, task)
+    assert plain.objectives.tobytes() == evaluation.objectives.tobytes()
 
 
 def test_an_unstable_world_counts_as_neither():

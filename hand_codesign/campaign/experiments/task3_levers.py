@@ -8,8 +8,11 @@ capsule that has not moved stays within: every candidate is then scored on how l
 disturbs the capsule, and a hand whose fingers stand clear of it wins. These configurations
 keep the task and its measure and change the search: MO-CMA-ES as Table I (the paper's
 configuration), CMA-ES on the weighted sum, each with early termination and on whole motions
-(no early termination, so no horizon), and BIPOP-CMA-ES (restarts, alternately with larger
-populations and smaller steps) on whole motions. Each a lever, reported as such.
+(no early termination, so no horizon), BIPOP-CMA-ES (restarts, alternately with larger
+populations and smaller steps) on whole motions, and CMA-MAE on whole motions over the turn the
+capsule makes (the outcome `turn`, core.outcomes) and the fingers' length: an archive that keeps
+the best hand of each turn apart, so the hands that turn the capsule further are not lost to
+those that hold it still. Each a lever, reported as such.
 """
 
 from hand_codesign.campaign.experiment import budgets
@@ -21,6 +24,10 @@ from hand_codesign.core.experiments.measures import ORIENTATION_01
 PRESET = 'task3.yaml'
 WORLDS = 16  # Table I's world states for Task 3
 WHOLE_MOTIONS = (('early_termination', None),)  # no early termination: no horizon either
+# the archive's grid: the capsule's turn (0.5 is the goal's 90 degrees) in 20 cells of 9
+# degrees, so that hands a few degrees apart keep apart, by the fingers' length in 5
+BY_TURN = (('optimizer.archive.descriptors', ('turn', 'finger_length')),
+           ('optimizer.archive.cells', (20, 5)))
 
 
 @add
@@ -29,13 +36,15 @@ def task3_levers():
     return Experiment(
         'task3-levers',
         'beyond the paper: Task 3 (turn a capsule 90 degrees, from scratch) with MO-CMA-ES as '
-        'Table I and CMA-ES, each with early termination and on whole motions, and BIPOP-CMA-ES '
-        '(restarts) on whole motions',
+        'Table I and CMA-ES, each with early termination and on whole motions, BIPOP-CMA-ES '
+        '(restarts) on whole motions, and CMA-MAE over the turn achieved on whole motions',
         (Configuration('mocma', PRESET, 'mocma', WORLDS, 'torque'),
          Configuration('cma', PRESET, 'cma', WORLDS, 'torque'),
          Configuration('mocma-whole', PRESET, 'mocma', WORLDS, 'torque', WHOLE_MOTIONS),
          Configuration('cma-whole', PRESET, 'cma', WORLDS, 'torque', WHOLE_MOTIONS),
          Configuration('bipop-cma-whole', PRESET, 'bipop-cma', WORLDS, 'torque',
-                       WHOLE_MOTIONS)),
+                       WHOLE_MOTIONS),
+         Configuration('cma-mae-turn-whole', PRESET, 'cma-mae', WORLDS, 'torque',
+                       WHOLE_MOTIONS + BY_TURN)),
         ORIENTATION_01, budgets((3, 8, 100, 1), (60, 40, 1000, 2), (1000, 250, 1000, 5)),
         beyond_paper=True)
