@@ -12,7 +12,10 @@ configuration), CMA-ES on the weighted sum, each with early termination and on w
 populations and smaller steps) on whole motions, and CMA-MAE on whole motions over the turn the
 capsule makes (the outcome `turn`, core.outcomes) and the fingers' length: an archive that keeps
 the best hand of each turn apart, so the hands that turn the capsule further are not lost to
-those that hold it still. Each a lever, reported as such.
+those that hold it still. Each a lever, reported as such. Last, our reading of the hand
+questioned: `task3_clear_sweep.yaml` places the fingers where the capsule's turn does not pass
+(in task3.yaml two of the three stand in its path), searched as Table I (`mocma-clear`) and by
+CMA-ES on whole motions (`cma-whole-clear`).
 """
 
 from hand_codesign.campaign.experiment import budgets
@@ -22,6 +25,8 @@ from hand_codesign.campaign.registry import add
 from hand_codesign.core.experiments.measures import ORIENTATION_01
 
 PRESET = 'task3.yaml'
+# the fingers' places read clear of the path the capsule's 90-degree turn sweeps
+CLEAR_SWEEP = 'task3_clear_sweep.yaml'
 WORLDS = 16  # Table I's world states for Task 3
 WHOLE_MOTIONS = (('early_termination', None),)  # no early termination: no horizon either
 # the archive's grid: the capsule's turn (0.5 is the goal's 90 degrees) in 20 cells of 9
@@ -37,7 +42,8 @@ def task3_levers():
         'task3-levers',
         'beyond the paper: Task 3 (turn a capsule 90 degrees, from scratch) with MO-CMA-ES as '
         'Table I and CMA-ES, each with early termination and on whole motions, BIPOP-CMA-ES '
-        '(restarts) on whole motions, and CMA-MAE over the turn achieved on whole motions',
+        '(restarts) on whole motions, CMA-MAE over the turn achieved on whole motions, and '
+        'the fingers placed clear of the path of the turn (MO-CMA-ES; CMA-ES, whole motions)',
         (Configuration('mocma', PRESET, 'mocma', WORLDS, 'torque'),
          Configuration('cma', PRESET, 'cma', WORLDS, 'torque'),
          Configuration('mocma-whole', PRESET, 'mocma', WORLDS, 'torque', WHOLE_MOTIONS),
@@ -45,6 +51,8 @@ def task3_levers():
          Configuration('bipop-cma-whole', PRESET, 'bipop-cma', WORLDS, 'torque',
                        WHOLE_MOTIONS),
          Configuration('cma-mae-turn-whole', PRESET, 'cma-mae', WORLDS, 'torque',
-                       WHOLE_MOTIONS + BY_TURN)),
+                       WHOLE_MOTIONS + BY_TURN),
+         Configuration('mocma-clear', CLEAR_SWEEP, 'mocma', WORLDS, 'torque'),
+         Configuration('cma-whole-clear', CLEAR_SWEEP, 'cma', WORLDS, 'torque', WHOLE_MOTIONS)),
         ORIENTATION_01, budgets((3, 8, 100, 1), (60, 40, 1000, 2), (1000, 250, 1000, 5)),
         beyond_paper=True)
