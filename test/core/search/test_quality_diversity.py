@@ -268,7 +268,7 @@ BAD_ARCHIVES = [
                                     'got 0'),
     ('cma-mae', {'descriptors': ['finger_length', 'wrist_angle']},
      'optimizer.archive.descriptors[1]: expected one of finger_length, length_asymmetry, '
-     'joint_range, initial_angle, finger_spread, friction, limit_rest, touch, got '
+     'joint_range, initial_angle, finger_spread, friction, limit_rest, touch, turn, got '
      "'wrist_angle'"),
     ('cma-mae', {'descriptors': ['finger_spread', 'joint_range']},
      'optimizer.archive.descriptors: expected descriptors that vary on structure [2, 2], got '
@@ -285,7 +285,7 @@ BAD_ARCHIVES = [
      'optimizer.archive: expected no archive for mocma (it is for cma-mae and cma-me'),
     ('cma-mae', {'descriptors': ['limit_rests', 'joint_range']},
      'optimizer.archive.descriptors[0]: expected one of finger_length, length_asymmetry, '
-     'joint_range, initial_angle, finger_spread, friction, limit_rest, touch, got '
+     'joint_range, initial_angle, finger_spread, friction, limit_rest, touch, turn, got '
      "'limit_rests'"),
 ]
 
