@@ -40,25 +40,35 @@ class Sweep:
         axis = np.array(rotate(spec.orientation, (0.0, 0.0, 1.0))[:2])
         start = np.arctan2(axis[1], axis[0])
         turn = vertical_turn(spec.orientation, task.goals.orientation[-1].orientation)
-        # the start's own heading is left out: a finger resting against the capsule there
-        # does not stop it turning away
-        angles = start + np.linspace(turn / HEADINGS, turn, HEADINGS)
+        angles = start + np.linspace(0.0, turn, HEADINGS + 1)
         self.turn = turn
         self.directions = np.stack([np.cos(angles), np.sin(angles)], axis=1)
         self.half_length = spec.length / 2
         self.reach = spec.radius + task.hand.segment_radius
 
     def first_meeting(self, point):
-        """Return the index of the first heading whose capsule meets base `point`, or None."""
+        """
+        Return the index of the first heading whose capsule meets base `point`, or None.
+
+        A base the capsule lies against at the start stops it there if the turn moves the
+        capsule towards it; if the turn moves it away, the base meets it only where the turn
+        comes back to it (a finger resting against the capsule does not stop it turning away).
+        """
         offset = np.asarray(point) - self.centre
         along = np.clip(self.directions @ offset, -self.half_length, self.half_length)
         distances = np.linalg.norm(offset - along[:, None] * self.directions, axis=1)
-        met = np.flatnonzero(distances < self.reach)
-        return int(met[0]) if len(met) else None
+        met = distances < self.reach
+        if met[0] and distances[1] <= distances[0]:
+            return 0
+        first_clear = int(np.argmin(met)) if met[0] else 0
+        if met[0] and met.all():
+            return None  # it turns away from the base and never leaves it: a base on the axis
+        later = np.flatnonzero(met[first_clear:])
+        return first_clear + int(later[0]) if len(later) else None
 
     def heading(self, index):
         """Return the turn (rad from the start) of heading `index`."""
-        return float(self.turn * (index + 1) / HEADINGS)
+        return float(self.turn * index / HEADINGS)
 
 
 def base_point(task, x, z):
