@@ -290,8 +290,7 @@ def _evaluate_in(simulator, design, task, worlds, on_frame, frame_every, on_worl
     kind = task.object_spec.shape
     objects = [(state, simulator.object_shape(state, kind)) for state in every_state]
     num_objectives = schedule.num_objectives
-    watch = OutcomeWatch(context.outcome_names, len(states),
-                         [state.orientation for state in states])
+    watch = OutcomeWatch(context.outcome_names, states)
     if simulator.start_collisions(objects):
         world_values = np.full((len(states), num_objectives), COLLISION_PENALTY)
         starts = np.array([(*state.position, *state.orientation) for state in states],

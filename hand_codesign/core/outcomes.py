@@ -114,40 +114,43 @@ def reached_its_limit(link, angle):
             or (at_upper and not start >= link.upper_limit - LIMIT_TOLERANCE))
 
 
-def turn_share(simulator, start):
-    """Return the object's turn about the vertical from `start` as a share of half a turn."""
-    return abs(vertical_turn(start, simulator.object_pose()[1])) / math.pi
+def turn_share(rollout, start):
+    """Return the object's turn about the vertical, start to the rollout's end, in half turns."""
+    return abs(vertical_turn(start.orientation, rollout.final_orientation)) / math.pi
 
 
-_RULES = {'limit_rest': lambda simulator, start: float(resting_on_limit_touching(simulator)),
-          'touch': lambda simulator, start: float(bool(touching_links(simulator))),
-          'turn': turn_share}
+# each rule reads (simulator, rollout, the world's ObjectState at the start) at a rollout's end
+_RULES = {'limit_rest': lambda simulator, rollout, start: float(
+              resting_on_limit_touching(simulator)),
+          'touch': lambda simulator, rollout, start: float(bool(touching_links(simulator))),
+          'turn': lambda simulator, rollout, start: turn_share(rollout, start)}
 
 
 class OutcomeWatch:
     """Per world, the value of each named outcome at the end of its rollout."""
 
-    def __init__(self, names, worlds, starts=None):
+    def __init__(self, names, starts):
         """
-        Watch `worlds` rollouts for the outcomes `names` (of OUTCOME_NAMES).
+        Watch the rollouts of worlds `starts` for the outcomes `names` (of OUTCOME_NAMES).
 
-        `starts` holds each world's start orientation of the object, quaternions (x, y, z, w),
-        shape (worlds, 4); only `turn` reads it.
+        `starts`: each world's object at the start (core.sim.worlds.ObjectState, whose
+        orientation `turn` reads), one per world in rollout order.
         """
         self.names = tuple(names)
-        self.values = np.zeros((worlds, len(self.names)))
         self.starts = starts
+        self.values = np.zeros((len(starts), len(self.names)))
 
     def on_end(self, index):
         """Return the Simulator.rollout `on_end` of world `index`, or None without outcomes."""
         if not self.names:
             return None
-        start = None if self.starts is None else self.starts[index]
+        start = self.starts[index]
 
         def read(simulator, rollout):
             # an unstable world's scene is no resting state: it counts as none (0)
             if not rollout.unstable:
-                self.values[index] = [_RULES[name](simulator, start) for name in self.names]
+                self.values[index] = [_RULES[name](simulator, rollout, start)
+                                      for name in self.names]
         return read
 
     def shares(self):

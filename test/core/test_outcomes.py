@@ -120,11 +120,11 @@ def test_the_turn_outcome_is_the_mean_turn_of_the_final_poses(task, design):  # 
 
 
 def test_an_unstable_world_counts_as_neither():
-    watch = OutcomeWatch(('limit_rest', 'touch'), 2)
+    watch = OutcomeWatch(('limit_rest', 'touch'), [None, None])
     unstable = dataclasses.make_dataclass('Rollout', ['unstable'])(True)
     watch.on_end(0)(None, unstable)  # the scene is never read
     assert watch.shares().tolist() == [0.0, 0.0]
-    assert OutcomeWatch((), 3).on_end(0) is None
+    assert OutcomeWatch((), [None] * 3).on_end(0) is None
 
 
 def test_answers_agree_only_when_objectives_and_outcomes_agree_bit_for_bit():

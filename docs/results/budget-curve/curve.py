@@ -20,6 +20,7 @@ median and p90 of the error, the run's wall time) and OUT.png (within against ro
 import argparse
 import json
 import pathlib
+import sys
 
 from hand_codesign.analysis import records
 from hand_codesign.analysis.figures import load_pyplot
@@ -28,6 +29,7 @@ from hand_codesign.campaign.measures import measure_bag
 from hand_codesign.campaign.measures import world_measures_of
 from hand_codesign.core.experiments.measures import summarize
 from hand_codesign.core.experiments.measures import Tolerance
+from hand_codesign.errors import UserError
 
 
 def rollouts_run(record):
@@ -112,4 +114,7 @@ def main():
 
 
 if __name__ == '__main__':
-    main()
+    try:
+        main()
+    except UserError as error:  # a bag that is missing or not ours: one line, no traceback
+        sys.exit(f'curve.py: {error}')

@@ -20,6 +20,7 @@ Writes OUT.md: the picks on the --unseen worlds, then every front design on the 
 
 import argparse
 import pathlib
+import sys
 
 from hand_codesign.analysis import records
 from hand_codesign.analysis.resume import recorded_run
@@ -30,6 +31,7 @@ from hand_codesign.core.experiments.measures import unseen_world_states
 from hand_codesign.core.search.optimizers import front_index
 from hand_codesign.core.search.optimizers import replay
 from hand_codesign.core.search.search import Search
+from hand_codesign.errors import UserError
 import numpy as np
 
 
@@ -100,4 +102,7 @@ def main():
 
 
 if __name__ == '__main__':
-    main()
+    try:
+        main()
+    except UserError as error:  # a bag that is missing or not ours: one line, no traceback
+        sys.exit(f'front.py: {error}')
