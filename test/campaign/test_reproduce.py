@@ -204,22 +204,31 @@ def test_task6_paper_hand_levers_change_one_thing_each_or_two_together():
     assert together.worlds == worst.worlds
 
 
-@pytest.mark.parametrize('experiment, key, preset, genes', [
-    ('levers-task5', 'cma-placed', 'task5.yaml', 4),
-    ('levers-task5', 'cma-goal-y-placed', 'task5_goal_y.yaml', 4),
-    ('levers-task5', 'cma-goal-y-placed-sigma-0.3', 'task5_goal_y.yaml', 4),
-    ('levers-task6', 'cma-palm-beside-placed', 'task6_palm_beside.yaml', 3)])
+@pytest.mark.parametrize('experiment, key, unplaced, preset, genes', [
+    ('levers-task5', 'cma-placed', None, 'task5.yaml', 4),
+    ('levers-task5', 'cma-goal-y-placed', None, 'task5_goal_y.yaml', 4),
+    ('levers-task5', 'cma-goal-y-placed-sigma-0.3', None, 'task5_goal_y.yaml', 4),
+    ('levers-task6', 'cma-palm-beside-placed', None, 'task6_palm_beside.yaml', 3),
+    ('task4-structures', 'mocma-1-3-placed-mujoco', 'mocma-1-3-mujoco', 'task4_structure.yaml',
+     4),
+    ('task4-structures', 'mocma-2-2-placed-mujoco', 'mocma-2-2-mujoco', 'task4_structure.yaml',
+     4)])
 def test_placed_levers_search_the_palm_around_the_presets_own_placement(
-        experiment, key, preset, genes):
+        experiment, key, unplaced, preset, genes):
     # the palm's place and turn searched, nothing else changed: the preset's own placement
-    # lies inside the bounds, and each range wider than a point is one more gene
+    # (or that of the configuration without placement) lies inside the bounds, and each range
+    # wider than a point is one more gene
     text = (definition.pinned_dir() / preset).read_text()
-    pinned = parse_task(text).replace(source_text='')
-    configuration, = [c for c in experiments.EXPERIMENTS[experiment].configurations
-                      if c.key == key]
-    assert configuration.preset == preset
-    placed = parse_task(definition.configuration_task_text(configuration, text)).replace(
-        source_text='')
+    configurations = {c.key: c for c in experiments.EXPERIMENTS[experiment].configurations}
+
+    def configured(configuration_key):
+        configuration = configurations[configuration_key]
+        assert configuration.preset == preset
+        return parse_task(definition.configuration_task_text(configuration, text)).replace(
+            source_text='')
+
+    pinned = configured(unplaced) if unplaced else parse_task(text).replace(source_text='')
+    placed = configured(key)
     assert placed.hand.placement_searched and not pinned.hand.placement_searched
     for value, bounds in zip(pinned.hand.base_position, placed.hand.base_position_bounds):
         assert bounds.lower <= value <= bounds.upper
