@@ -89,10 +89,18 @@ def unseen_turns(task, design, count):
     """
     Return (worlds, turns, touched) on `count` unseen worlds of the task's ranges.
 
-    turns: (count,) rad, the object's heading at the end less at the start (as `trace`);
-    touched: (count,) bool, a link of a finger (not the palm) touched it at some frame.
+    turns: (count,) rad, the object's heading at the end less at the start (as `trace`), NaN
+    in a world the design starts in collision with; touched: (count,) bool, a link of a finger
+    (not the palm) touched it at some frame.
     """
     worlds = unseen_world_states(task, count)
+    turns, touched = turns_in_worlds(task, design, worlds)
+    return worlds, turns, touched
+
+
+def turns_in_worlds(task, design, worlds):
+    """Return (turns, touched) of unseen_turns on the given worlds."""
+    count = len(worlds)
     start, touched, current = {}, np.zeros(count, dtype=bool), [0]
 
     def on_world(index, simulator):
@@ -107,10 +115,16 @@ def unseen_turns(task, design, count):
         touched[index] |= any(link >= 0 for link in simulator.touching_links(1e-3))
     evaluation = evaluate_design(design, task, worlds, on_world=on_world, on_frame=on_frame,
                                  frame_every=max(1, int(round(0.05 / task.time_step))))
+    if evaluation.collision:
+        # a start collision in one world stops the whole batch: find the worlds it is in
+        if count == 1:
+            return np.full(1, np.nan), np.zeros(1, dtype=bool)
+        parts = [turns_in_worlds(task, design, [world]) for world in worlds]
+        return tuple(np.concatenate(column) for column in zip(*parts))
     turns = np.array([np.angle(np.exp(1j * (yaw(pose[3:], start[i][0]) - start[i][1])))
                       if i in start else np.nan
                       for i, pose in enumerate(evaluation.final_poses)])
-    return worlds, turns, touched
+    return turns, touched
 
 
 def picture(task, design, world, path, times, view=(20, -70), distance=0.3):
@@ -190,9 +204,11 @@ def describe(design):
 def report_unseen(task, design, count):
     """Print the turn on `count` unseen worlds and its rank correlation with each quantity."""
     worlds, turns, touched = unseen_turns(task, design, count)
+    collided = np.isnan(turns)
     print(f'{count} unseen worlds: turn median {np.nanmedian(turns):+.3f} rad, '
           f'p10 {np.nanpercentile(turns, 10):+.3f}, p90 {np.nanpercentile(turns, 90):+.3f}; '
-          f'a finger touched it in {np.mean(touched):.0%}')
+          f'a finger touched it in {np.mean(touched[~collided]):.0%} of those simulated; the '
+          f'design starts in collision in {np.mean(collided):.0%} (not simulated)')
     values = np.array([[*w.position_delta, w.orientation_delta, w.friction_delta, w.scale,
                         w.mass_factor] for w in worlds])
     print('rank correlation of the turn with each randomized quantity: ' + ', '.join(
