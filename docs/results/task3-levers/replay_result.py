@@ -205,6 +205,9 @@ def report_unseen(task, design, count):
     """Print the turn on `count` unseen worlds and its rank correlation with each quantity."""
     worlds, turns, touched = unseen_turns(task, design, count)
     collided = np.isnan(turns)
+    if collided.all():
+        print(f'{count} unseen worlds: the design starts in collision in every one')
+        return
     print(f'{count} unseen worlds: turn median {np.nanmedian(turns):+.3f} rad, '
           f'p10 {np.nanpercentile(turns, 10):+.3f}, p90 {np.nanpercentile(turns, 90):+.3f}; '
           f'a finger touched it in {np.mean(touched[~collided]):.0%} of those simulated; the '
