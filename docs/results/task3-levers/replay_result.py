@@ -3,10 +3,10 @@ Replay a campaign's design from its result file: what the hand does, world by wo
 
 A campaign commits each run's result (`result-KEY-seedN.json`: the best design by gene name)
 and the task it ran (`tasks/KEY.yaml`), not its bag. This re-simulates that design in the
-nominal world or an unseen one (PyBullet) and prints, every `--every` seconds: where the object is, its turn
-about the vertical since the start (its heading in the plane), which of the hand's links touch it (finger.joint, -1 the
-palm) and which joints rest on a limit; then its final errors, and optionally a strip of
-frames of the rollout.
+nominal world or an unseen one, in the task's engine, and prints every `--every` seconds:
+where the object is, its turn about the vertical since the start (core.rotations.vertical_turn),
+which of the hand's links touch it ('finger.joint', or the palm) and which joints rest on a
+limit; then its final errors, and optionally a strip of frames of the rollout (PyBullet).
 
 Usage (from the repository's root):
     python docs/results/task3-levers/replay_result.py TASK.yaml RESULT.json \
@@ -18,11 +18,11 @@ import json
 import sys
 
 from hand_codesign.core.evaluate import evaluate_design
-from hand_codesign.core.rotations import rotation_matrix
-from hand_codesign.core.experiments.measures import unseen_world_states
+from hand_codesign.core.experiments.measures import measure_worlds, unseen_world_states
+from hand_codesign.core.rotations import vertical_turn
 from hand_codesign.core.sim.worlds import WorldState
-from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.core.task import TaskError
+from hand_codesign.core.task.genome import genome_spec
 from hand_codesign.core.task.reader import load_task
 import numpy as np
 from scipy.stats import spearmanr
@@ -32,6 +32,9 @@ WORLD_QUANTITIES = ('position_x', 'position_y', 'position_z', 'orientation_delta
 
 # a joint within this of a limit (rad) rests on it
 ON_LIMIT = 0.02
+
+# steps between frames when only the start pose is wanted: longer than any rollout
+ONLY_THE_FIRST_FRAME = 1 << 30
 
 
 def recorded_design(task, result):
@@ -54,17 +57,6 @@ def resting_on_limits(design, angles):
             and min(abs(angle - joint.lower_limit), abs(angle - joint.upper_limit)) < ON_LIMIT]
 
 
-def body_axes(orientation):
-    """Return the object's own x, y and z axes in the world frame (rows), of (x, y, z, w)."""
-    return rotation_matrix(orientation).T
-
-
-def yaw(orientation, axis):
-    """Return the heading (rad) in the plane of the object's own axis `axis` (0, 1 or 2)."""
-    direction = body_axes(orientation)[axis]
-    return float(np.arctan2(direction[1], direction[0]))
-
-
 def trace(task, design, every, world):
     """Return the evaluation and rows (t, position, turn since start, touching, on limits)."""
     names = joint_names(design)
@@ -72,12 +64,11 @@ def trace(task, design, every, world):
 
     def on_frame(step, simulator):
         position, orientation = simulator.object_pose()
-        if not start:  # the object's own axis that lies flattest at the start gives its heading
-            start.append(int(np.argmin(np.abs(body_axes(orientation)[:, 2]))))
-            start.append(yaw(orientation, start[0]))
-        turn = yaw(orientation, start[0]) - start[1]
+        if not start:
+            start.append(orientation)
+        turn = vertical_turn(start[0], orientation)
         touching = sorted(simulator.touching_links(1e-3))
-        rows.append((step * task.time_step, position, float(np.angle(np.exp(1j * turn))),
+        rows.append((step * task.time_step, position, turn,
                      ['palm' if link < 0 else names[link] for link in touching],
                      resting_on_limits(design, simulator.joint_angles())))
     steps = max(1, int(round(every / task.time_step)))
@@ -89,9 +80,9 @@ def unseen_turns(task, design, count):
     """
     Return (worlds, turns, touched) on `count` unseen worlds of the task's ranges.
 
-    turns: (count,) rad, the object's heading at the end less at the start (as `trace`), NaN
-    in a world the design starts in collision with; touched: (count,) bool, a link of a finger
-    (not the palm) touched it at some frame.
+    turns: (count,) rad, the object's turn about the vertical from its start to the end of the
+    rollout (core.rotations.vertical_turn), NaN in a world the design starts in collision
+    with; touched: (count,) bool, a link of a finger (not the palm) touched it at some frame.
     """
     worlds = unseen_world_states(task, count)
     turns, touched = turns_in_worlds(task, design, worlds)
@@ -100,31 +91,27 @@ def unseen_turns(task, design, count):
 
 def turns_in_worlds(task, design, worlds):
     """Return (turns, touched) of unseen_turns on the given worlds."""
-    count = len(worlds)
-    start, touched, current = {}, np.zeros(count, dtype=bool), [0]
+    measures = measure_worlds(genome_spec(task).encode(design), task, worlds)
+    turns = np.full(len(worlds), np.nan)
+    simulated = np.flatnonzero(~measures.collisions)
+    if simulated.size:
+        turns[simulated] = final_turns(task, design, [worlds[i] for i in simulated])
+    return turns, measures.touched & ~measures.collisions
+
+
+def final_turns(task, design, worlds):
+    """Return (worlds,) rad: the object's turn about the vertical over each world's rollout."""
+    starts, current = {}, [0]
 
     def on_world(index, simulator):
         current[0] = index
 
     def on_frame(step, simulator):
-        index = current[0]
-        if index not in start:
-            orientation = simulator.object_pose()[1]
-            axis = int(np.argmin(np.abs(body_axes(orientation)[:, 2])))
-            start[index] = (axis, yaw(orientation, axis))
-        touched[index] |= any(link >= 0 for link in simulator.touching_links(1e-3))
+        starts.setdefault(current[0], simulator.object_pose()[1])
     evaluation = evaluate_design(design, task, worlds, on_world=on_world, on_frame=on_frame,
-                                 frame_every=max(1, int(round(0.05 / task.time_step))))
-    if evaluation.collision:
-        # a start collision in one world stops the whole batch: find the worlds it is in
-        if count == 1:
-            return np.full(1, np.nan), np.zeros(1, dtype=bool)
-        parts = [turns_in_worlds(task, design, [world]) for world in worlds]
-        return tuple(np.concatenate(column) for column in zip(*parts))
-    turns = np.array([np.angle(np.exp(1j * (yaw(pose[3:], start[i][0]) - start[i][1])))
-                      if i in start else np.nan
-                      for i, pose in enumerate(evaluation.final_poses)])
-    return turns, touched
+                                 frame_every=ONLY_THE_FIRST_FRAME)
+    return np.array([vertical_turn(starts[i], pose[3:])
+                     for i, pose in enumerate(evaluation.final_poses)])
 
 
 def picture(task, design, world, path, times, view=(20, -70), distance=0.3):
@@ -143,6 +130,7 @@ def picture(task, design, world, path, times, view=(20, -70), distance=0.3):
 
 
 def main():
+    """Replay the design and print what it does; return the exit status."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     parser.add_argument('task', help='the task file the campaign ran (its tasks/KEY.yaml)')
     parser.add_argument('result', help="the run's result file (result-KEY-seedN.json)")
