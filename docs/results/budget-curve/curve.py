@@ -65,6 +65,11 @@ def measured(bag, tolerance, unseen, cache):
     return values
 
 
+def unit(tolerance):
+    """Return the unit of a tolerance's error: a pose error counts tolerances."""
+    return {'pose': 'tolerances', 'orientation': 'rad'}.get(tolerance.kind, 'm')
+
+
 def main():
     """Measure each bag, write the table and the figure."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
@@ -82,7 +87,8 @@ def main():
     tolerance = Tolerance(arguments.tolerance, arguments.limit)
     also = [Tolerance(kind, float(limit)) for kind, limit in
             (text.split(':') for text in arguments.also)]
-    lines = ['| run | generations | rollouts run | of Table I | within | median (m, rad) | p90 | '
+    lines = ['| run | generations | rollouts run | of Table I | within | '
+             f'median ({unit(tolerance)}) | p90 | '
              + ''.join(f'{other.describe()} | ' for other in also) + 'wall (min) |',
              '|---|---|---|---|---|---|---|' + '---|' * len(also) + '---|']
     points = []
