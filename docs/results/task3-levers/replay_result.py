@@ -18,7 +18,8 @@ import json
 import sys
 
 from hand_codesign.core.evaluate import evaluate_design
-from hand_codesign.core.experiments.measures import measure_worlds, unseen_world_states
+from hand_codesign.core.experiments.measures import (full_motion, measure_worlds,
+                                                     unseen_world_states)
 from hand_codesign.core.rotations import vertical_turn
 from hand_codesign.core.sim.worlds import WorldState
 from hand_codesign.core.task import TaskError
@@ -90,7 +91,8 @@ def unseen_turns(task, design, count):
 
 
 def turns_in_worlds(task, design, worlds):
-    """Return (turns, touched) of unseen_turns on the given worlds."""
+    """Return (turns, touched) of unseen_turns on the given worlds, whole motions."""
+    task = full_motion(task)   # as measure_worlds runs them: no early stop, no horizon
     measures = measure_worlds(genome_spec(task).encode(design), task, worlds)
     turns = np.full(len(worlds), np.nan)
     simulated = np.flatnonzero(~measures.collisions)
