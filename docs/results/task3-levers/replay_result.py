@@ -187,8 +187,14 @@ def describe(design):
         print(f'finger {finger} at {np.round(values.position, 3).tolist()}, segments '
               f'{np.round(values.segment_lengths, 3).tolist()} m, joints '
               + '; '.join(f'axis {joint.axis_angle:+.2f} start {joint.initial_angle:+.2f} '
-                          f'limits [{joint.lower_limit:+.2f}, {joint.upper_limit:+.2f}]'
-                          for joint in values.joints))
+                          + limits_text(joint) for joint in values.joints))
+
+
+def limits_text(joint):
+    """Return 'limits [lower, upper]' of a joint (rad), or 'no limits'."""
+    if joint.lower_limit is None:
+        return 'no limits'
+    return f'limits [{joint.lower_limit:+.2f}, {joint.upper_limit:+.2f}]'
 
 
 def report_unseen(task, design, count):
