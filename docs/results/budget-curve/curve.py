@@ -27,6 +27,7 @@ from hand_codesign.analysis.figures import load_pyplot
 from hand_codesign.analysis.resume import runs_continued
 from hand_codesign.campaign.measures import measure_bag
 from hand_codesign.campaign.measures import world_measures_of
+from hand_codesign.campaign.tables import error_unit
 from hand_codesign.core.experiments.measures import summarize
 from hand_codesign.core.experiments.measures import Tolerance
 from hand_codesign.errors import UserError
@@ -65,11 +66,6 @@ def measured(bag, tolerance, unseen, cache):
     return values
 
 
-def unit(tolerance):
-    """Return the unit of a tolerance's error: a pose error counts tolerances."""
-    return {'pose': 'tolerances', 'orientation': 'rad'}.get(tolerance.kind, 'm')
-
-
 def main():
     """Measure each bag, write the table and the figure."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
@@ -88,7 +84,7 @@ def main():
     also = [Tolerance(kind, float(limit)) for kind, limit in
             (text.split(':') for text in arguments.also)]
     lines = ['| run | generations | rollouts run | of Table I | within | '
-             f'median ({unit(tolerance)}) | p90 | '
+             f'median ({error_unit(tolerance)}) | p90 | '
              + ''.join(f'{other.describe()} | ' for other in also) + 'wall (min) |',
              '|---|---|---|---|---|---|---|' + '---|' * len(also) + '---|']
     points = []

@@ -18,8 +18,8 @@ import json
 import sys
 
 from hand_codesign.core.evaluate import evaluate_design
-from hand_codesign.core.experiments.measures import (full_motion, measure_worlds,
-                                                     unseen_world_states)
+from hand_codesign.core.experiments.measures import measure_worlds, unseen_world_states
+from hand_codesign.core.experiments.robustness import start_and_goal_poses
 from hand_codesign.core.rotations import vertical_turn
 from hand_codesign.core.sim.worlds import WorldState
 from hand_codesign.core.task import TaskError
@@ -33,9 +33,6 @@ WORLD_QUANTITIES = ('position_x', 'position_y', 'position_z', 'orientation_delta
 
 # a joint within this of a limit (rad) rests on it
 ON_LIMIT = 0.02
-
-# steps between frames when only the start pose is wanted: longer than any rollout
-ONLY_THE_FIRST_FRAME = 1 << 30
 
 
 def recorded_design(task, result):
@@ -92,28 +89,12 @@ def unseen_turns(task, design, count):
 
 def turns_in_worlds(task, design, worlds):
     """Return (turns, touched) of unseen_turns on the given worlds, whole motions."""
-    task = full_motion(task)   # as measure_worlds runs them: no early stop, no horizon
     measures = measure_worlds(genome_spec(task).encode(design), task, worlds)
-    turns = np.full(len(worlds), np.nan)
-    simulated = np.flatnonzero(~measures.collisions)
-    if simulated.size:
-        turns[simulated] = final_turns(task, design, [worlds[i] for i in simulated])
+    starts = start_and_goal_poses(task, worlds)[0]
+    turns = np.array([np.nan if collided else vertical_turn(start[3:], end)
+                      for start, end, collided in zip(starts, measures.final_orientations,
+                                                      measures.collisions)])
     return turns, measures.touched & ~measures.collisions
-
-
-def final_turns(task, design, worlds):
-    """Return (worlds,) rad: the object's turn about the vertical over each world's rollout."""
-    starts, current = {}, [0]
-
-    def on_world(index, simulator):
-        current[0] = index
-
-    def on_frame(step, simulator):
-        starts.setdefault(current[0], simulator.object_pose()[1])
-    evaluation = evaluate_design(design, task, worlds, on_world=on_world, on_frame=on_frame,
-                                 frame_every=ONLY_THE_FIRST_FRAME)
-    return np.array([vertical_turn(starts[i], pose[3:])
-                     for i, pose in enumerate(evaluation.final_poses)])
 
 
 def picture(task, design, world, path, times, view=(20, -70), distance=0.3):

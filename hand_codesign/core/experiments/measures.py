@@ -123,6 +123,7 @@ class WorldMeasures:
     final_positions: Optional[np.ndarray] = None  # (worlds, 3) m, world frame; not cached
     touched: Optional[np.ndarray] = None  # (worlds,) bool: a finger touched it at some frame
     touching: Optional[np.ndarray] = None  # (worlds,) bool: a finger touches it at the end
+    final_orientations: Optional[np.ndarray] = None  # (worlds, 4) (x, y, z, w); not cached
 
 
 @dataclasses.dataclass(frozen=True)
@@ -179,7 +180,7 @@ def measure_worlds(x, task, worlds, processes=1):
     initial_errors = with_pose_error(dict(_offsets(starts, goals), position=initial[:, 0],
                                           orientation=initial[:, 1]))
     return WorldMeasures(errors, initial_errors, collisions, contacts, reached,
-                         final_poses[:, :3], touched, touching)
+                         final_poses[:, :3], touched, touching, final_poses[:, 3:])
 
 
 def full_motion(task):
